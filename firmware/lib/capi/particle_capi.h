@@ -1,0 +1,81 @@
+// C interface to the firmware logic for PC builds: the host's virtual particles and the pytest
+// suite load build/native/libparticle.so through ctypes and drive the very code that is flashed.
+// This file is the contract between firmware/lib and host/particlebot/firmware/native.py:
+// change both together. Nothing here is compiled for the AVR.
+#ifndef PARTICLEBOT_PARTICLE_CAPI_H
+#define PARTICLEBOT_PARTICLE_CAPI_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PB_SENSOR_COUNT 6
+#define PB_EEPROM_SIZE 1024
+
+typedef struct pb_particle pb_particle;
+
+// ---- one whole particle: the same Particle controller main.cpp runs --------------------------
+
+// Creates a particle from an EEPROM image (NULL or shorter than PB_EEPROM_SIZE: the rest reads as
+// erased 0xFF, as on a new chip). reset_cause is the MCUSR value the particle reports.
+// rng_seed stands in for the ADC noise the real particle seeds its jitter from.
+pb_particle *pb_particle_new(const uint8_t *eeprom, size_t eeprom_len, uint8_t reset_cause,
+                             uint32_t rng_seed);
+void pb_particle_free(pb_particle *particle);
+
+// Raw ADC values (0..1023) each photocell reads from now on, until changed. Every tick the
+// particle draws as many samples as the real main loop would in the elapsed time (one ADC
+// conversion per ~125 us), 50 per sensor per reading.
+void pb_particle_set_adc(pb_particle *particle, const uint16_t adc[PB_SENSOR_COUNT]);
+
+// Bytes that arrived on Serial1.
+void pb_particle_receive(pb_particle *particle, const uint8_t *bytes, size_t count);
+
+// Advances the logic to now_ms (monotonic, may wrap at 2^32). Call at least every 5 ms of
+// simulated time for servo steps to fall on their 20 ms boundaries.
+void pb_particle_tick(pb_particle *particle, uint32_t now_ms);
+
+// Moves up to capacity bytes queued for Serial1 into out; returns how many.
+size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity);
+
+uint8_t pb_particle_id(const pb_particle *particle);
+uint16_t pb_particle_servo_pulse_us(const pb_particle *particle);
+uint32_t pb_particle_radius_um(const pb_particle *particle);
+
+// Writes the payload of the STATUS frame the particle would send now; returns its length.
+size_t pb_particle_status_payload(const pb_particle *particle, uint8_t *out, size_t capacity);
+
+// Copies the particle's EEPROM image (PB_EEPROM_SIZE bytes at most); returns how many.
+size_t pb_particle_eeprom(const pb_particle *particle, uint8_t *out, size_t capacity);
+
+// ---- pure functions, for property tests ------------------------------------------------------
+
+uint32_t pb_definition_hash(void);
+
+// S_n of a particle reading own_intensity when the others read others[0..others_count) in its
+// estimation round. method is the protocol's method enum; the rest are the parameters of the
+// same names (GROUPS = 0: one group per particle heard).
+uint8_t pb_estimate(uint8_t method, uint16_t own_intensity, const uint16_t *others,
+                    size_t others_count, int32_t ref_distance_mm, int32_t ref_value,
+                    int32_t diameter_mm, int32_t count_tolerance, int32_t groups);
+
+// Frames one message; returns the frame length, or 0 if it does not fit in capacity or the
+// payload exceeds max_payload.
+size_t pb_encode_frame(uint8_t type, uint8_t sender, uint8_t seq, const uint8_t *payload,
+                       size_t payload_len, uint8_t *out, size_t capacity);
+
+// Runs the firmware's streaming parser over input. Each frame it accepts is written to out as
+// [type, sender, seq, payload_len, payload...]; returns the bytes written (a frame that would not
+// fit in capacity stops the parse). counters receives rx_frames, rx_bad_crc, rx_bad_length,
+// rx_skipped_bytes, as STATUS reports them.
+size_t pb_parse_stream(const uint8_t *input, size_t input_len, uint8_t *out, size_t capacity,
+                       uint16_t counters[4]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif  // PARTICLEBOT_PARTICLE_CAPI_H

@@ -1,0 +1,1 @@
+"""particlebot: firmware tooling, base-station console and virtual particles for particle robots."""

@@ -10,7 +10,7 @@ BUILD := build
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 # Debian packages the offline firmware build, the emulator and the C++ checks need.
-SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++
+SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev
 
 .PHONY: help demo test system-deps venv generate check-generated native native-asan cpp-test \
         firmware firmware-faults harness lint format pytest bench clean
@@ -60,7 +60,8 @@ LOGIC_INCLUDES := $(addprefix -I,$(wildcard firmware/lib/*))
 NATIVE_CXX := g++
 NATIVE_FLAGS := -std=gnu++11 -Wall -Wextra -Werror -Wshadow -fPIC $(LOGIC_INCLUDES)
 SANITIZE := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-CPP_TEST_SOURCES := $(wildcard firmware/test/*.cpp)
+# doctest comes from Debian's doctest-dev here and from PlatformIO's registry under `pio test -e native`.
+CPP_TEST_SOURCES := $(wildcard firmware/test/*/*.cpp)
 
 # Release build the host's virtual particles load.
 $(BUILD)/native/libparticle.so: $(LOGIC_SOURCES) $(LOGIC_HEADERS)
@@ -74,7 +75,7 @@ $(BUILD)/native-asan/libparticle.so: $(LOGIC_SOURCES) $(LOGIC_HEADERS)
 
 $(BUILD)/native-asan/firmware_tests: $(LOGIC_SOURCES) $(LOGIC_HEADERS) $(CPP_TEST_SOURCES)
 	@mkdir -p $(@D)
-	$(NATIVE_CXX) $(NATIVE_FLAGS) $(SANITIZE) -O1 -g -Ifirmware/test -o $@ $(CPP_TEST_SOURCES) $(LOGIC_SOURCES)
+	$(NATIVE_CXX) $(NATIVE_FLAGS) $(SANITIZE) -O1 -g -I/usr/include/doctest -o $@ $(CPP_TEST_SOURCES) $(LOGIC_SOURCES)
 
 native: $(BUILD)/native/libparticle.so
 native-asan: $(BUILD)/native-asan/libparticle.so $(BUILD)/native-asan/firmware_tests

@@ -85,13 +85,128 @@ cpp-test: $(BUILD)/native-asan/firmware_tests
 	$(BUILD)/native-asan/firmware_tests shared/vectors.toml
 
 # ---- firmware for the particle (ATmega32U4, Debian's avr-gcc and Arduino core) ----------------
-# (filled in by the firmware build: see firmware/README section in README.md)
+# PlatformIO (platformio.ini) needs its own downloads; this build needs only Debian packages.
 
-firmware: $(BUILD)/.system-deps
+AVR_CC := avr-gcc
+AVR_CXX := avr-g++
+AVR_AR := avr-gcc-ar
+AVR_OBJCOPY := avr-objcopy
+AVR_SIZE := avr-size
+ARDUINO_AVR := /usr/share/arduino/hardware/arduino/avr
+ARDUINO_CORE := $(ARDUINO_AVR)/cores/arduino
+# The Leonardo variant has the Fio v3's pin map.
+ARDUINO_VARIANT := $(ARDUINO_AVR)/variants/leonardo
+FW := $(BUILD)/firmware
+# Budgets of the whole image (the Caterina bootloader leaves 28 672 B flash, the chip has 2 560 B
+# SRAM); the rest of the SRAM is stack.
+FW_FLASH_BUDGET := 16384
+FW_RAM_BUDGET := 1024
+
+# A particle talks over its XBee; its USB port only matters for uploads. Leaving the Arduino USB
+# serial stack out (FW_USB=0, see main.cpp) saves 2.9 KB of flash and 140 B of RAM, which the
+# budget needs; the price is pressing reset before an upload instead of the automatic
+# 1200-baud reset. FW_USB=1 puts it back.
+FW_USB ?= 0
+FW_MCU := -mmcu=atmega32u4 -DF_CPU=8000000L -DARDUINO=10807 -DARDUINO_AVR_FIOV3 -DARDUINO_ARCH_AVR \
+  -DUSB_VID=0x1B4F -DUSB_PID=0xF101 '-DUSB_PRODUCT="SparkFun Fio v3"' \
+  $(if $(filter 0,$(FW_USB)),-DPARTICLE_NO_USB)
+FW_OPT := -Os -flto -ffunction-sections -fdata-sections -MMD -MP
+# gcc 5.4 defines DECIMAL_DIG only for C, and the core's WString.cpp needs it.
+FW_CXX_ONLY := -std=gnu++11 -fno-exceptions -fno-threadsafe-statics -DDECIMAL_DIG=__DECIMAL_DIG__
+FW_CORE_INCLUDES := -I$(ARDUINO_CORE) -I$(ARDUINO_VARIANT)
+# Our own code builds warning-free; the Arduino core is compiled as shipped.
+FW_OWN_WARNINGS := -Wall -Wextra -Werror
+FW_LOGIC_SOURCES ?= $(filter-out firmware/lib/capi/%,$(LOGIC_SOURCES))
+FW_LOGIC_INCLUDES ?= $(filter-out -Ifirmware/lib/capi,$(LOGIC_INCLUDES))
+
+# Rewritten only when the flags change, so that changing FW_USB (say) rebuilds what it affects.
+FW_FLAGS_STAMP := $(FW)/flags.stamp
+FW_FLAGS_TEXT := $(FW_MCU) $(FW_OPT) $(FW_CXX_ONLY) $(FW_OWN_WARNINGS) $(FW_LOGIC_INCLUDES)
+$(FW_FLAGS_STAMP): FORCE
+	@mkdir -p $(@D)
+	@echo '$(FW_FLAGS_TEXT)' | cmp -s - $@ || echo '$(FW_FLAGS_TEXT)' > $@
+
+FORCE:
+.PHONY: FORCE
+
+FW_CORE_SOURCES := $(wildcard $(ARDUINO_CORE)/*.c $(ARDUINO_CORE)/*.cpp $(ARDUINO_CORE)/*.S)
+FW_CORE_OBJECTS := $(patsubst $(ARDUINO_CORE)/%,$(FW)/core/%.o,$(FW_CORE_SOURCES))
+FW_LOGIC_OBJECTS := $(patsubst %,$(FW)/obj/%.o,$(FW_LOGIC_SOURCES))
+
+$(FW)/core/%.c.o: $(ARDUINO_CORE)/%.c $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(AVR_CC) $(FW_MCU) $(FW_OPT) -std=gnu11 $(FW_CORE_INCLUDES) -c -o $@ $<
+
+$(FW)/core/%.cpp.o: $(ARDUINO_CORE)/%.cpp $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(AVR_CXX) $(FW_MCU) $(FW_OPT) $(FW_CXX_ONLY) $(FW_CORE_INCLUDES) -c -o $@ $<
+
+$(FW)/core/%.S.o: $(ARDUINO_CORE)/%.S $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(AVR_CC) $(FW_MCU) -x assembler-with-cpp -MMD -MP $(FW_CORE_INCLUDES) -c -o $@ $<
+
+# An archive, so that only the core objects the firmware uses are linked: linked directly, unused
+# ones (Tone, WInterrupts) would bring their interrupt vectors along.
+$(FW)/core/core.a: $(FW_CORE_OBJECTS)
+	rm -f $@
+	$(AVR_AR) rcs $@ $^
+
+$(FW)/obj/%.cpp.o: %.cpp $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(AVR_CXX) $(FW_MCU) $(FW_OPT) $(FW_CXX_ONLY) $(FW_OWN_WARNINGS) $(FW_CORE_INCLUDES) \
+	  $(FW_LOGIC_INCLUDES) -c -o $@ $<
+
+# The fault-injection build differs from the normal one in main.cpp only.
+$(FW)/faults/%.cpp.o: %.cpp $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(AVR_CXX) $(FW_MCU) $(FW_OPT) $(FW_CXX_ONLY) $(FW_OWN_WARNINGS) $(FW_CORE_INCLUDES) \
+	  $(FW_LOGIC_INCLUDES) -DPARTICLE_FAULT_INJECTION -c -o $@ $<
+
+FW_LINK = $(AVR_CXX) $(FW_MCU) -Os -flto -fuse-linker-plugin -Wl,--gc-sections -o $@ $^ -lm
+
+$(FW)/particle.elf: $(FW)/obj/firmware/src/main.cpp.o $(FW_LOGIC_OBJECTS) $(FW)/core/core.a
+	$(FW_LINK)
+
+$(FW)/particle-faults.elf: $(FW)/faults/firmware/src/main.cpp.o $(FW_LOGIC_OBJECTS) $(FW)/core/core.a
+	$(FW_LINK)
+
+$(FW)/%.hex: $(FW)/%.elf
+	$(AVR_OBJCOPY) -O ihex -R .eeprom $< $@
+
+# Prints flash (.text + .data) and static RAM (.data + .bss + .noinit) against the budgets. Over
+# budget it warns (tests/sim fails then) but keeps the image, so the emulator tests still run;
+# FW_STRICT=1 makes it an error.
+FW_STRICT ?= 0
+define fw_check_size
+	@$(AVR_SIZE) -C --mcu=atmega32u4 $(1) | grep -E 'Program|Data'
+	@set -- $$($(AVR_SIZE) -A $(1) | awk '$$1 == ".text" {t = $$2} $$1 == ".data" {d = $$2} \
+	    $$1 == ".bss" {b = $$2} $$1 == ".noinit" {n = $$2} END {print t + d, d + b + n}'); \
+	printf '%s: flash %d of %d B budget, static RAM %d of %d B budget\n' \
+	  $(1) $$1 $(FW_FLASH_BUDGET) $$2 $(FW_RAM_BUDGET); \
+	if [ $$1 -gt $(FW_FLASH_BUDGET) ] || [ $$2 -gt $(FW_RAM_BUDGET) ]; then \
+	  echo "WARNING: $(1) is over its budget" >&2; [ "$(FW_STRICT)" = 0 ]; fi
+endef
+
+firmware: $(BUILD)/.system-deps $(FW)/particle.elf $(FW)/particle.hex
+	$(call fw_check_size,$(FW)/particle.elf)
+
+firmware-faults: $(BUILD)/.system-deps $(FW)/particle-faults.elf
+	$(call fw_check_size,$(FW)/particle-faults.elf)
+
+-include $(shell find $(FW) -name '*.d' 2>/dev/null)
 
 # ---- firmware in the loop: simavr harness ------------------------------------------------------
 
-harness: $(BUILD)/.system-deps
+SIM_CC := gcc
+SIM_CFLAGS := -std=gnu11 -O2 -Wall -Wextra -Werror
+
+# simavr's headers are included as system headers so that -Wextra judges only our code.
+$(BUILD)/sim/particle_sim: tools/sim/particle_sim.c | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(SIM_CC) $(SIM_CFLAGS) $$(pkg-config --cflags-only-I simavr | sed 's/-I/-isystem /g') \
+	  -o $@ $< $$(pkg-config --libs simavr) -lelf
+
+harness: $(BUILD)/.system-deps $(BUILD)/sim/particle_sim
 
 # ---- checks -------------------------------------------------------------------------------------
 

@@ -1,0 +1,245 @@
+// Fio v3 hardware wiring for pb::Particle: servo, photocells, XBee, EEPROM and the watchdog.
+// All behaviour lives in firmware/lib; this file only moves bits between pins and the logic.
+
+// clang-format off
+// The logic comes first: Arduino.h defines function-like macros (round, min, max, abs) that
+// would rewrite the logic's member functions of the same names.
+#include "particle.h"
+
+#include <Arduino.h>
+#include <avr/eeprom.h>
+#include <avr/wdt.h>
+#include <util/atomic.h>
+
+#include <new>
+// clang-format on
+
+// ---- reset cause ----------------------------------------------------------------------------
+
+// Filled before the C runtime clears .bss, so it must live in .noinit.
+uint8_t g_reset_flags __attribute__((section(".noinit")));
+
+// Runs from .init3, before .data/.bss are set up and long before setup(): a watchdog reset
+// leaves the watchdog running at its shortest period (16 ms), which would bite again while the
+// C runtime and the Arduino core start. WDRF forces WDE on, so MCUSR must be cleared first.
+// (Behind the Caterina USB bootloader MCUSR arrives already cleared: the bootloader reads and
+// clears it itself, so a particle flashed over USB reports cause 0.)
+extern "C" void capture_reset_flags() __attribute__((naked, used, section(".init3")));
+extern "C" void capture_reset_flags() {
+  g_reset_flags = MCUSR;
+  MCUSR = 0;
+  wdt_disable();
+}
+
+namespace {
+
+// ---- servo on D9 (PB5): Timer1 in CTC mode, 1 tick = 1 us -------------------------------------
+
+const uint16_t kServoFrameUs = 20000;  // 50 Hz frames
+const uint16_t kServoMinUs = 500;
+const uint16_t kServoMaxUs = 2500;
+
+// Compare value for the falling edge; the loop writes it, TIMER1_COMPA_vect reads it at the start
+// of each frame, so a pulse never changes width half-way.
+volatile uint16_t g_servo_fall_tick = 1500 - 1;
+
+void servo_set(uint16_t pulse_us) {
+  if (pulse_us < kServoMinUs) pulse_us = kServoMinUs;
+  if (pulse_us > kServoMaxUs) pulse_us = kServoMaxUs;
+  // The pin rises as TCNT1 wraps to 0 and falls as it leaves the compare value, so the pulse is
+  // one tick longer than the value.
+  const uint16_t fall = pulse_us - 1;
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    g_servo_fall_tick = fall;
+  }
+}
+
+void servo_begin(uint16_t pulse_us) {
+  servo_set(pulse_us);
+  PORTB &= ~_BV(PORTB5);
+  DDRB |= _BV(DDB5);
+  // The Arduino core left Timer1 in 8-bit PWM for analogWrite(); take it over completely.
+  TCCR1B = 0;
+  TCCR1A = 0;
+  TCCR1C = 0;
+  TCNT1 = 0;
+  OCR1A = kServoFrameUs - 1;  // TOP: the counter wraps every 20 000 ticks
+  OCR1B = g_servo_fall_tick;
+  TIFR1 = _BV(OCF1A) | _BV(OCF1B);
+  TIMSK1 = _BV(OCIE1A) | _BV(OCIE1B);
+  TCCR1B = _BV(WGM12) | _BV(CS11);  // CTC with TOP = OCR1A, clk/8 = 1 MHz at 8 MHz
+}
+
+// ---- ADC: one conversion in flight, collected on a later loop pass ---------------------------
+
+const uint8_t kNoSensor = 0xFF;
+// Channels are the MUX5:0 codes of ADCSRB/ADMUX. D4/A6 (ADC8) is not connected on the particle:
+// its floating input is a noise source, and so is the temperature sensor's lowest bit.
+const uint8_t kFloatingChannel = 0x20;
+const uint8_t kTemperatureChannel = 0x27;
+const uint8_t kRefAvcc = _BV(REFS0);                   // 3.3 V: the photocells' supply
+const uint8_t kRefInternal = _BV(REFS1) | _BV(REFS0);  // 2.56 V: what the sensor needs
+
+uint8_t g_adc_sensor = kNoSensor;  // sensor whose conversion is running
+
+// A0..A5 are wired to ADC7, ADC6, ADC5, ADC4, ADC1, ADC0.
+uint8_t sensor_channel(uint8_t sensor) {
+  return sensor < 4 ? 7 - sensor : 5 - sensor;
+}
+
+void adc_start(uint8_t channel, uint8_t reference = kRefAvcc) {
+  ADMUX = reference | (channel & 0x1F);  // right-adjusted result
+  if (channel & 0x20) {
+    ADCSRB |= _BV(MUX5);
+  } else {
+    ADCSRB &= ~_BV(MUX5);
+  }
+  ADCSRA |= _BV(ADSC);  // init() left the ADC enabled at clk/64 = 125 kHz
+}
+
+bool adc_busy() {
+  return (ADCSRA & _BV(ADSC)) != 0;
+}
+
+// Runs once, before the Particle exists (it needs the seed to be built), so this short wait
+// (40 conversions, about 4.5 ms) is the only place that waits on the ADC. The photocells come
+// last so that the reference has settled back to AVcc when the sampling proper begins.
+uint32_t seed_from_noise() {
+  uint32_t seed = 2166136261u;  // FNV-1a over the raw readings
+  for (uint8_t i = 0; i < 40; ++i) {
+    if (i < 8) {
+      adc_start(kTemperatureChannel, kRefInternal);
+    } else {
+      adc_start(i & 1 ? kFloatingChannel : sensor_channel(i % 6));
+    }
+    while (adc_busy()) {
+    }
+    const uint16_t raw = ADC;
+    seed = (seed ^ (raw & 0xFF)) * 16777619u;
+    seed = (seed ^ (raw >> 8)) * 16777619u;
+  }
+  return seed;
+}
+
+// ---- EEPROM -------------------------------------------------------------------------------
+
+class EepromStorage : public pb::Storage {
+ public:
+  uint8_t read(uint16_t address) const override {
+    if (address > E2END) return 0xFF;
+    return eeprom_read_byte(reinterpret_cast<const uint8_t *>(address));
+  }
+  void write(uint16_t address, uint8_t value) override {
+    if (address > E2END) return;
+    // Each changed byte costs ~3.4 ms: a long rewrite must not starve the watchdog.
+    wdt_reset();
+    eeprom_update_byte(reinterpret_cast<uint8_t *>(address), value);
+  }
+};
+
+EepromStorage g_storage;
+
+// Built in setup(), once the reset cause and the seed are known; static storage so that avr-size
+// counts it against the RAM budget.
+alignas(pb::Particle) uint8_t g_particle_memory[sizeof(pb::Particle)];
+pb::Particle *g_particle = nullptr;
+
+// ---- Serial1 (XBee) -------------------------------------------------------------------------
+
+void serial_receive(uint32_t now_ms) {
+  int pending = Serial1.available();
+  while (pending-- > 0) {
+    g_particle->on_rx_byte(static_cast<uint8_t>(Serial1.read()), now_ms);
+  }
+}
+
+void serial_transmit() {
+  uint8_t chunk[16];
+  int room = Serial1.availableForWrite();
+  while (room > 0) {
+    const size_t want =
+        room < static_cast<int>(sizeof chunk) ? static_cast<size_t>(room) : sizeof chunk;
+    const size_t got = g_particle->take_tx(chunk, want);
+    if (got == 0) return;
+    Serial1.write(chunk, got);
+    room -= static_cast<int>(got);
+  }
+}
+
+void adc_poll() {
+  if (g_adc_sensor != kNoSensor) {
+    if (adc_busy()) return;
+    g_particle->on_adc_sample(g_adc_sensor, ADC);
+  }
+  g_adc_sensor = g_particle->next_sensor();
+  if (g_adc_sensor > 5) {
+    g_adc_sensor = kNoSensor;
+    return;
+  }
+  adc_start(sensor_channel(g_adc_sensor));
+}
+
+#ifdef PARTICLE_FAULT_INJECTION
+// Test builds only: D2 (PD1) pulled up; an emulator test drives it low to hang the loop so the
+// watchdog must reset the particle.
+void fault_begin() {
+  DDRD &= ~_BV(DDD1);
+  PORTD |= _BV(PORTD1);
+}
+
+void fault_check() {
+  if ((PIND & _BV(PIND1)) == 0) {
+    for (;;) {
+      __asm__ __volatile__("");  // a hang the compiler may not remove
+    }
+  }
+}
+#endif
+
+}  // namespace
+
+ISR(TIMER1_COMPA_vect) {
+  PORTB |= _BV(PORTB5);
+  OCR1B = g_servo_fall_tick;  // not double-buffered in CTC mode: set it while the pulse is high
+}
+
+ISR(TIMER1_COMPB_vect) {
+  PORTB &= ~_BV(PORTB5);
+}
+
+void setup() {
+  const uint8_t reset_flags = g_reset_flags;
+#ifdef PARTICLE_FAULT_INJECTION
+  fault_begin();
+#endif
+  const uint32_t seed = seed_from_noise();
+  g_particle = new (g_particle_memory) pb::Particle(g_storage, reset_flags, seed);
+  Serial1.begin(9600);
+  g_particle->begin(millis());
+  servo_begin(g_particle->servo_pulse_us());
+  wdt_enable(WDTO_250MS);
+}
+
+void loop() {
+  wdt_reset();
+#ifdef PARTICLE_FAULT_INJECTION
+  fault_check();
+#endif
+  const uint32_t now_ms = millis();
+  serial_receive(now_ms);
+  adc_poll();
+  g_particle->tick(now_ms);
+  servo_set(g_particle->servo_pulse_us());
+  serial_transmit();
+}
+
+#ifdef PARTICLE_NO_USB
+// Replaces the Arduino core's main(), which attaches the USB CDC port: without that call the USB
+// stack is not linked at all (about 2.9 KB of flash and 140 B of RAM). Uploading then needs a
+// press of the reset button, after which the Caterina bootloader waits 8 s for avrdude.
+int main() {
+  init();
+  setup();
+  for (;;) loop();
+}
+#endif

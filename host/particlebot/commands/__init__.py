@@ -1,0 +1,1 @@
+"""The particlebot subcommands, one thin module each; cli.py parses arguments and dispatches."""

@@ -1,0 +1,36 @@
+"""`particlebot console`: the live console on a radio, logging everything."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from particlebot.commands._common import fail, station
+from particlebot.console.app import ConsoleApp
+from particlebot.radio import RadioError
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.radio:
+        return fail(
+            "say which radio: --radio serial:///dev/ttyUSB0 (transparent XBee), "
+            "--radio xbee:///dev/ttyUSB0 (API mode) or --radio virtual://10"
+        )
+    try:
+        with station(args.radio, _log_dir(args), fsync=args.fsync) as base:
+            app = ConsoleApp(
+                base.model,
+                radio_name=base.radio.url,
+                log_path=None if base.log_path is None else str(base.log_path),
+            )
+            try:
+                code = app.run()
+            except KeyboardInterrupt:
+                code = 0
+            return code or 0
+    except RadioError as exc:
+        return fail(str(exc))
+
+
+def _log_dir(args: argparse.Namespace) -> Path | None:
+    return None if args.no_log else Path(args.log_dir)

@@ -1,0 +1,55 @@
+"""`particlebot replay`: feed a log back through the console (or print what it held)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from particlebot.commands._common import fail, run_headless, station
+from particlebot.console.app import ConsoleApp
+from particlebot.console.model import state_name
+from particlebot.logs.jsonl import LogFormatError
+from particlebot.logs.replay import ReplayRadio
+from particlebot.radio import RadioError
+
+
+def run(args: argparse.Namespace) -> int:
+    speed = math.inf if args.speed == "max" else float(args.speed)
+    try:
+        radio = ReplayRadio(Path(args.log), speed)
+    except (RadioError, LogFormatError) as exc:
+        return fail(str(exc))
+    ui = not args.no_ui and sys.stdout.isatty()
+    with station(radio, None) as base:
+        if ui:
+            announced = False
+
+            def tick() -> int | None:
+                nonlocal announced
+                if radio.finished and not announced:
+                    announced = True
+                    base.model.note(f"Replay of {args.log} finished; q quits")
+                return None
+
+            app = ConsoleApp(base.model, radio_name=radio.url, log_path=str(args.log), on_tick=tick)
+            try:
+                return app.run() or 0
+            except KeyboardInterrupt:
+                return 0
+        try:
+            run_headless(base.model, lambda: 0 if radio.finished else None)
+        except KeyboardInterrupt:
+            return 0
+        # Let the receive thread hand over the last packets before summarising.
+        base.session.close()
+        print(f"Replayed {radio.total_packets} packets from {args.log}")
+        print(base.model.counters_text())
+        for row in base.model.rows():
+            status = row.status
+            print(
+                f"particle {row.id:>3}  state {state_name(status.state) if status else '?':<11}"
+                f"  S_n {status.s_n if status else '-':>3}  intensity {row.intensity}"
+            )
+        return 0

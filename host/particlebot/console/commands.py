@@ -1,0 +1,226 @@
+"""The console's command line: parses what a person types and calls the model (no UI here)."""
+
+from __future__ import annotations
+
+import shlex
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from particlebot.console.model import ConsoleModel
+from particlebot.protocol import BROADCAST_ID, PARAM_SPECS, Method, Param
+
+METHOD_NAMES: dict[str, Method] = {
+    "a": Method.DIRECT,
+    "b": Method.LINEAR,
+    "c": Method.NONLINEAR,
+    "d": Method.COUNTING,
+    **{method.name.lower(): method for method in Method},
+}
+
+
+class CommandError(ValueError):
+    """The line could not be understood; the message says how to write it."""
+
+
+@dataclass(frozen=True)
+class CommandHelp:
+    usage: str
+    summary: str
+
+
+COMMANDS: dict[str, CommandHelp] = {
+    "start": CommandHelp(
+        "start [A|B|C|D] [cycle=STEPS] [wave=N] [update=S] [phototaxis=0|1]",
+        "start a run: estimation method A direct, B linear, C nonlinear, D counting (default D); "
+        "cycle = servo steps of 20 ms per cycle, wave = N of eq. 3, update = seconds between "
+        "re-estimations (0 keeps each particle's stored value; wave 0 = automatic)",
+    ),
+    "stop": CommandHelp("stop", "broadcast STOP until every known particle reports it stopped"),
+    "set": CommandHelp(
+        "set PARAM VALUE [ID|all]", "set a parameter (stored in EEPROM; refused while running)"
+    ),
+    "get": CommandHelp("get PARAM [ID|all]", "read a parameter"),
+    "params": CommandHelp("params", "list the parameters with their ranges and defaults"),
+    "identify": CommandHelp("identify ID|all", "make an idle particle wiggle three times"),
+    "setid": CommandHelp("setid ID NEW_ID", "give the particle with id ID the id NEW_ID (1..253)"),
+    "ping": CommandHelp("ping [ID|all]", "ask for a STATUS now"),
+    "help": CommandHelp("help [COMMAND]", "show the commands"),
+    "quit": CommandHelp("quit", "leave the console (the log is kept)"),
+}
+
+
+def help_text(command: str | None = None) -> str:
+    if command is not None:
+        entry = COMMANDS.get(command)
+        if entry is None:
+            raise CommandError(f"No command '{command}'. Commands: {', '.join(COMMANDS)}")
+        return f"{entry.usage}\n  {entry.summary}"
+    width = max(len(entry.usage) for entry in COMMANDS.values())
+    return "\n".join(f"{entry.usage:<{width}}  {entry.summary}" for entry in COMMANDS.values())
+
+
+def params_text() -> str:
+    lines = []
+    for param, spec in PARAM_SPECS.items():
+        lines.append(
+            f"{param.name.lower():<18} {int(param):>3}  {spec.min}..{spec.max} "
+            f"(default {spec.default})  {spec.description}"
+        )
+    return "\n".join(lines)
+
+
+def parse_param(text: str) -> Param:
+    try:
+        return Param(int(text, 0)) if text[:1].isdigit() else Param[text.upper()]
+    except (KeyError, ValueError):
+        raise CommandError(f"No parameter '{text}'; type 'params' for the list") from None
+
+
+def parse_target(text: str | None, *, allow_all: bool = True) -> int:
+    if text is None or text.lower() in ("all", "*"):
+        if not allow_all:
+            raise CommandError("Name one particle by its id here")
+        return BROADCAST_ID
+    try:
+        value = int(text, 0)
+    except ValueError:
+        raise CommandError(f"'{text}' is not a particle id (a number, or 'all')") from None
+    if not 0 <= value <= 255:
+        raise CommandError(f"Particle ids are 1..254, not {value}")
+    return value
+
+
+def _int(text: str, what: str) -> int:
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise CommandError(f"{what} must be a whole number, not '{text}'") from None
+
+
+def _check_range(value: int, param: Param, what: str, zero_ok: bool) -> None:
+    spec = PARAM_SPECS[param]
+    if zero_ok and value == 0:
+        return
+    if not spec.min <= value <= spec.max:
+        extra = " (or 0 to keep the stored value)" if zero_ok else ""
+        raise CommandError(f"{what} must be {spec.min}..{spec.max}{extra}, not {value}")
+
+
+def _start(model: ConsoleModel, args: list[str]) -> str:
+    method = Method.COUNTING
+    options = {"cycle": 0, "wave": 0, "update": 0, "phototaxis": 0}
+    aliases = {"photo": "phototaxis", "cycle_steps": "cycle", "wave_size": "wave"}
+    for arg in args:
+        if "=" in arg:
+            key, _, value = arg.partition("=")
+            key = aliases.get(key.lower(), key.lower())
+            if key not in options:
+                raise CommandError(f"start takes cycle=, wave=, update=, phototaxis=; not '{key}='")
+            options[key] = _int(value, key)
+        elif arg.lower() in METHOD_NAMES:
+            method = METHOD_NAMES[arg.lower()]
+        else:
+            raise CommandError(f"Unknown method '{arg}': use A, B, C or D")
+    _check_range(options["cycle"], Param.CYCLE_STEPS, "cycle", zero_ok=True)
+    _check_range(options["update"], Param.UPDATE_INTERVAL_S, "update", zero_ok=True)
+    _check_range(options["wave"], Param.WAVE_SIZE, "wave", zero_ok=True)
+    if options["phototaxis"] not in (0, 1):
+        raise CommandError("phototaxis must be 0 or 1")
+    campaign = model.start(
+        method,
+        cycle_steps=options["cycle"],
+        wave_size=options["wave"],
+        update_interval_s=options["update"],
+        phototaxis=bool(options["phototaxis"]),
+    )
+    return (
+        f"START run {model.run_id} method {method.name} sent to {len(campaign.pending)} "
+        "known particle(s); resending until each confirms"
+    )
+
+
+def _stop(model: ConsoleModel, args: list[str]) -> str:
+    campaign = model.stop()
+    return f"STOP sent; repeating until all {len(campaign.pending)} known particle(s) report it"
+
+
+def _set(model: ConsoleModel, args: list[str]) -> str:
+    if len(args) not in (2, 3):
+        raise CommandError(f"usage: {COMMANDS['set'].usage}")
+    param = parse_param(args[0])
+    value = _int(args[1], "VALUE")
+    _check_range(value, param, param.name.lower(), zero_ok=False)
+    target = parse_target(args[2] if len(args) == 3 else None)
+    model.set_param(param, value, target)
+    return f"SET_PARAM {param.name} = {value} sent to {_target_text(target)}"
+
+
+def _get(model: ConsoleModel, args: list[str]) -> str:
+    if len(args) not in (1, 2):
+        raise CommandError(f"usage: {COMMANDS['get'].usage}")
+    param = parse_param(args[0])
+    target = parse_target(args[1] if len(args) == 2 else None)
+    model.get_param(param, target)
+    return f"GET_PARAM {param.name} sent to {_target_text(target)}"
+
+
+def _identify(model: ConsoleModel, args: list[str]) -> str:
+    if len(args) != 1:
+        raise CommandError(f"usage: {COMMANDS['identify'].usage}")
+    target = parse_target(args[0])
+    model.identify(target)
+    return f"IDENTIFY sent to {_target_text(target)}"
+
+
+def _setid(model: ConsoleModel, args: list[str]) -> str:
+    if len(args) != 2:
+        raise CommandError(f"usage: {COMMANDS['setid'].usage}")
+    target = parse_target(args[0], allow_all=False)
+    new_id = _int(args[1], "NEW_ID")
+    if target == BROADCAST_ID:
+        raise CommandError("SET_ID must name one particle, never broadcast")
+    if not 1 <= new_id <= 253:
+        raise CommandError(f"NEW_ID must be 1..253, not {new_id}")
+    model.set_id(target, new_id)
+    return f"SET_ID {target} -> {new_id} sent"
+
+
+def _ping(model: ConsoleModel, args: list[str]) -> str:
+    target = parse_target(args[0] if args else None)
+    model.ping(target)
+    return f"PING sent to {_target_text(target)}"
+
+
+def _target_text(target: int) -> str:
+    return "all particles" if target == BROADCAST_ID else f"particle {target}"
+
+
+_HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], str]] = {
+    "start": _start,
+    "stop": _stop,
+    "set": _set,
+    "get": _get,
+    "identify": _identify,
+    "setid": _setid,
+    "ping": _ping,
+    "params": lambda model, args: params_text(),
+    "help": lambda model, args: help_text(args[0] if args else None),
+}
+
+
+def execute(model: ConsoleModel, line: str) -> str:
+    """Runs one command line; returns what to show. CommandError if it is not understood.
+
+    `quit` is the UI's business and is not handled here.
+    """
+    try:
+        words = shlex.split(line)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    if not words:
+        return ""
+    name, args = words[0].lower(), words[1:]
+    handler = _HANDLERS.get(name)
+    if handler is None:
+        raise CommandError(f"Unknown command '{name}'. Type 'help' for the list.")
+    return handler(model, args)

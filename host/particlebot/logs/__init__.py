@@ -1,0 +1,1 @@
+"""Session logs: JSON lines written as things happen, read back, exported to CSV or replayed."""

@@ -1,0 +1,242 @@
+"""One radio interface for the base station, with backends chosen by a URL-like name."""
+
+from __future__ import annotations
+
+import enum
+import importlib
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Self
+from urllib.parse import parse_qsl, urlsplit
+
+__all__ = [
+    "BACKENDS",
+    "InvalidRadioUrlError",
+    "LinkEvent",
+    "LinkState",
+    "NoResponseError",
+    "Packet",
+    "PortBusyError",
+    "PortLostError",
+    "PortNotFoundError",
+    "PortPermissionError",
+    "Radio",
+    "RadioError",
+    "RadioUrl",
+    "ReadOnlyRadioError",
+    "WrongModeError",
+    "open_radio",
+    "parse_radio_url",
+]
+
+# Scheme -> "module:class". Each backend is one module, imported only when its scheme is used, so
+# a missing optional dependency of one backend never breaks the others. A new backend is one line.
+BACKENDS: dict[str, str] = {
+    "serial": "particlebot.radio.serial:SerialRadio",
+    "xbee": "particlebot.radio.xbee:XBeeRadio",
+    "virtual": "particlebot.radio.virtual:VirtualRadio",
+    "replay": "particlebot.logs.replay:ReplayRadio",
+}
+
+
+@dataclass(frozen=True)
+class Packet:
+    """Bytes that arrived together: one RF packet (API mode, virtual) or one serial read."""
+
+    data: bytes
+    # Who sent it as far as the radio can tell (an XBee address); None on a transparent link,
+    # where bytes of every sender arrive in one stream.
+    source: Hashable | None
+    time: float
+
+
+class LinkState(enum.Enum):
+    CONNECTED = "connected"
+    LOST = "lost"
+    WARNING = "warning"
+    CLOSED = "closed"
+
+
+@dataclass(frozen=True)
+class LinkEvent:
+    state: LinkState
+    message: str
+    time: float
+
+
+class RadioError(Exception):
+    """A radio problem; the message always says what to do about it."""
+
+
+class InvalidRadioUrlError(RadioError):
+    pass
+
+
+class PortNotFoundError(RadioError):
+    pass
+
+
+class PortBusyError(RadioError):
+    pass
+
+
+class PortPermissionError(RadioError):
+    pass
+
+
+class WrongModeError(RadioError):
+    pass
+
+
+class NoResponseError(RadioError):
+    pass
+
+
+class PortLostError(RadioError):
+    pass
+
+
+class ReadOnlyRadioError(RadioError):
+    pass
+
+
+@dataclass(frozen=True)
+class RadioUrl:
+    """`scheme://target?key=value&...`, e.g. serial:///dev/ttyUSB0?baud=9600 or virtual://10."""
+
+    text: str
+    scheme: str
+    target: str
+    options: dict[str, str]
+
+    def get_float(self, key: str, default: float) -> float:
+        value = self.options.get(key)
+        if value is None:
+            return default
+        try:
+            return float(value)
+        except ValueError:
+            raise InvalidRadioUrlError(f"{self.text}: {key}={value} is not a number") from None
+
+    def get_int(self, key: str, default: int) -> int:
+        value = self.options.get(key)
+        if value is None:
+            return default
+        try:
+            return int(value, 0)
+        except ValueError:
+            raise InvalidRadioUrlError(f"{self.text}: {key}={value} is not an integer") from None
+
+    def check_options(self, allowed: set[str]) -> None:
+        unknown = sorted(set(self.options) - allowed)
+        if unknown:
+            raise InvalidRadioUrlError(
+                f"{self.text}: unknown option(s) {', '.join(unknown)}; "
+                f"{self.scheme}:// takes {', '.join(sorted(allowed)) or 'no options'}"
+            )
+
+
+def _examples() -> str:
+    return (
+        "serial:///dev/ttyUSB0?baud=9600 (transparent XBee), xbee:///dev/ttyUSB0 (API mode), "
+        "virtual://10 (simulated swarm)"
+    )
+
+
+def parse_radio_url(text: str) -> RadioUrl:
+    split = urlsplit(text)
+    scheme = split.scheme.lower()
+    if not scheme or "://" not in text:
+        hint = ""
+        if text.startswith(("/dev/", "COM", "com")):
+            hint = f" Did you mean serial://{text} or xbee://{text}?"
+        raise InvalidRadioUrlError(f"'{text}' is not a radio URL.{hint} Examples: {_examples()}")
+    if scheme not in BACKENDS:
+        raise InvalidRadioUrlError(
+            f"unknown radio kind '{scheme}://'; known: "
+            f"{', '.join(k + '://' for k in BACKENDS)}. Examples: {_examples()}"
+        )
+    # serial:///dev/ttyUSB0 has an empty host and the device as path; serial://COM3 and
+    # virtual://10 carry everything in the host part.
+    target = split.netloc + split.path
+    options = dict(parse_qsl(split.query, keep_blank_values=True))
+    return RadioUrl(text=text, scheme=scheme, target=target, options=options)
+
+
+def open_radio(url: str) -> Radio:
+    """Opens the radio a URL names; raises RadioError with advice if it cannot."""
+    parsed = parse_radio_url(url)
+    module_name, _, class_name = BACKENDS[parsed.scheme].partition(":")
+    module = importlib.import_module(module_name)
+    backend: type[Radio] = getattr(module, class_name)
+    return backend.from_url(parsed)
+
+
+class Radio(ABC):
+    """A base-station radio: broadcasts application frames and hands over what it hears.
+
+    Backends report link changes (a port that vanished and came back) to link listeners instead
+    of raising from receive(), so one session survives an unplugged USB cable.
+    """
+
+    def __init__(self, url: str) -> None:
+        self.url = url
+        self._link_state = LinkState.CONNECTED
+        self._link_listeners: list[Callable[[LinkEvent], None]] = []
+        self._link_lock = threading.Lock()
+
+    @classmethod
+    @abstractmethod
+    def from_url(cls, url: RadioUrl) -> Self: ...
+
+    @abstractmethod
+    def send(self, data: bytes) -> None:
+        """Broadcasts one application frame; raises PortLostError while the port is gone."""
+
+    @abstractmethod
+    def receive(self, timeout: float | None = None) -> Packet | None:
+        """Next packet heard, or None after timeout seconds (None: wait until one comes)."""
+
+    def close(self) -> None:
+        self._set_link(LinkState.CLOSED, f"{self.url} closed")
+
+    def now(self) -> float:
+        """The clock packets are stamped with (seconds since the epoch; simulated for virtual)."""
+        return time.time()
+
+    @property
+    def link_state(self) -> LinkState:
+        return self._link_state
+
+    def add_link_listener(self, listener: Callable[[LinkEvent], None]) -> None:
+        with self._link_lock:
+            self._link_listeners.append(listener)
+
+    def _set_link(self, state: LinkState, message: str) -> None:
+        with self._link_lock:
+            if state is not LinkState.WARNING:
+                if state is self._link_state:
+                    return
+                self._link_state = state
+            listeners = list(self._link_listeners)
+        event = LinkEvent(state=state, message=message, time=self.now())
+        for listener in listeners:
+            listener(event)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.url!r})"

@@ -1,0 +1,90 @@
+"""The particlebot command: demo, export, replay, and error messages for wrong radios."""
+
+from __future__ import annotations
+
+import asyncio
+import csv
+from pathlib import Path
+
+import pytest
+
+from particlebot.cli import main
+from particlebot.commands._common import open_station
+from particlebot.commands.demo import DemoScript, Phase
+from particlebot.console.app import ConsoleApp
+from particlebot.radio.virtual import VirtualRadio
+from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+
+
+def test_the_demo_without_a_terminal_prints_a_summary_and_succeeds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(["demo", "--particles", "6", "--run-s", "4", "--log-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "every S_n equals the particle's rank" in out
+    assert "STOP confirmed by all 6 particles" in out
+    (log,) = tmp_path.glob("*.jsonl")
+    assert f"Log: {log}" in out
+
+
+def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
+    swarm = VirtualSwarm(SwarmConfig(count=5))
+    radio = VirtualRadio(swarm, url="virtual://5", speed=20.0)
+    base = open_station(radio, None)
+    script = DemoScript(base.model, swarm, cycle_steps=75, locomote_s=2.0)
+    app = ConsoleApp(
+        base.model, radio_name=radio.url, log_path=None, on_tick=script.poll, linger_s=0.1
+    )
+
+    async def run() -> int | None:
+        async with app.run_test(size=(140, 40)) as pilot:
+            while app.is_running:
+                await pilot.pause(0.1)
+        return app.return_value
+
+    try:
+        code = asyncio.run(asyncio.wait_for(run(), timeout=60))
+    finally:
+        base.session.close()
+    assert script.phase is Phase.DONE
+    assert code == 0
+    assert [r.s_n for r in script.results()] == [1, 2, 3, 4, 5]
+
+
+def test_export_and_replay_read_the_log_the_demo_wrote(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["demo", "--particles", "3", "--run-s", "1", "--log-dir", str(tmp_path)]) == 0
+    (log,) = tmp_path.glob("*.jsonl")
+    capsys.readouterr()
+    csv_path = tmp_path / "out.csv"
+    assert main(["export", str(log), "-o", str(csv_path), "--type", "STATUS"]) == 0
+    rows = list(csv.DictReader(csv_path.open()))
+    assert rows and {row["type"] for row in rows} == {"STATUS"}
+    assert {row["sender"] for row in rows} == {"1", "2", "3"}
+    assert main(["replay", str(log), "--speed", "max", "--no-ui"]) == 0
+    out = capsys.readouterr().out
+    for particle in (1, 2, 3):
+        assert f"particle   {particle}  state IDLE" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "complaint"),
+    [
+        (["console"], "say which radio"),
+        (["console", "--radio", "/dev/ttyUSB0"], "Did you mean serial:///dev/ttyUSB0"),
+        (["log", "--radio", "serial:///nonexistent/ttyUSB9"], "No serial port"),
+        (["console", "--radio", "carrier-pigeon://1"], "unknown radio kind"),
+        (["export", "/nonexistent/log.jsonl"], "no log file"),
+    ],
+)
+def test_wrong_radios_and_files_get_a_message_saying_what_to_do(
+    argv: list[str],
+    complaint: str,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("PARTICLEBOT_RADIO", raising=False)
+    assert main(argv) == 2
+    assert complaint in capsys.readouterr().err

@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""Measures the host receive path (decode, console model, log) and the virtual swarm speed-up."""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import statistics
+import tempfile
+import time
+from pathlib import Path
+from typing import Self
+
+from particlebot.console.model import ConsoleModel
+from particlebot.logs.jsonl import JsonlWriter
+from particlebot.protocol import DEFINITION_HASH, Method, Start, Status, encode_frame
+from particlebot.radio import Packet, Radio, RadioUrl
+from particlebot.session import Listener, ReceivedFrame, Session
+from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+
+LINK_BYTES_PER_S = 9600 / 10  # 8N1
+STATUS_FRAME_BYTES = Status.PAYLOAD_SIZE + 8
+
+
+class _QueueRadio(Radio):
+    def __init__(self) -> None:
+        super().__init__("bench://")
+        self.packets: queue.Queue[Packet] = queue.Queue()
+
+    @classmethod
+    def from_url(cls, url: RadioUrl) -> Self:
+        raise NotImplementedError
+
+    def send(self, data: bytes) -> None:
+        pass
+
+    def receive(self, timeout: float | None = None) -> Packet | None:
+        try:
+            return self.packets.get(timeout=timeout)
+        except queue.Empty:
+            return None
+
+
+class _Counter(Listener):
+    def __init__(self, target: int) -> None:
+        self.count = 0
+        self.target = target
+        self.done_at = 0.0
+
+    def on_frame(self, received: ReceivedFrame) -> None:
+        self.count += 1
+        if self.count == self.target:
+            self.done_at = time.perf_counter()
+
+
+def status_packets(count: int, senders: int = 10) -> list[Packet]:
+    packets = []
+    for seq in range(count):
+        sender = 1 + seq % senders
+        status = Status(
+            state=3, method=3, run_id=1, s_n=sender, group_size=senders, sensor_faults=0,
+            intensity=900 - sender, sensors=(900,) * 6, cycle_phase=seq % 1000, radius_um=90000,
+            uptime_ms=seq * 200, definition_hash=DEFINITION_HASH, rx_frames=seq, rx_bad_crc=0,
+            rx_bad_length=0, rx_skipped_bytes=0, resets=1, last_reset_cause=1,
+        )  # fmt: skip
+        data = encode_frame(status, sender, seq & 0xFF)
+        packets.append(Packet(data, f"radio-{sender}", 1000.0 + seq * 0.001))
+    return packets
+
+
+def receive_path(count: int, log_dir: Path) -> float:
+    """Frames per second through Session -> ConsoleModel + JsonlWriter (flushed per line)."""
+    radio = _QueueRadio()
+    counter = _Counter(count)
+    writer = JsonlWriter(log_dir / "bench.jsonl", radio=radio.url)
+    session = Session(radio, [counter, writer])
+    session.add_listener(ConsoleModel(session, radio.now))
+    packets = status_packets(count)
+    with session:
+        start = time.perf_counter()
+        for packet in packets:
+            radio.packets.put(packet)
+        while counter.count < count:
+            time.sleep(0.005)
+    return count / (counter.done_at - start)
+
+
+def swarm_speedup(particles: int, seconds: float, kinematics: bool) -> float:
+    """Simulated seconds per wall second for a running swarm (START sent, method D)."""
+    swarm = VirtualSwarm(SwarmConfig(count=particles, kinematics=kinematics))
+    start_message = Start(
+        run_id=1, method=int(Method.COUNTING), cycle_steps=150, wave_size=0,
+        update_interval_s=0, phototaxis=0,
+    )  # fmt: skip
+    swarm.send_from_base(encode_frame(start_message, 0, 0))
+    began = time.perf_counter()
+    swarm.run_for(seconds)
+    return seconds / (time.perf_counter() - began)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--frames", type=int, default=20000)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    ceiling = LINK_BYTES_PER_S / STATUS_FRAME_BYTES
+    with tempfile.TemporaryDirectory() as tmp:
+        rates = [receive_path(args.frames, Path(tmp)) for _ in range(args.repeats)]
+    rate = statistics.median(rates)
+    print(
+        f"host receive path (decode + console model + JSONL log, flushed per line): "
+        f"{rate:,.0f} STATUS frames/s; a 9600-baud link carries at most {ceiling:.1f} "
+        f"({rate / ceiling:,.0f}x headroom)"
+    )
+    for particles in (10, 50):
+        for kinematics in (True, False):
+            speedup = swarm_speedup(particles, 30.0, kinematics)
+            print(
+                f"virtual swarm, {particles} particles, kinematics "
+                f"{'on' if kinematics else 'off'}: {speedup:.0f}x real time"
+            )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,380 @@
+// Particle controller: dispatches frames, runs the coordinator and keeps the servo target.
+#include "particle.h"
+
+namespace pb {
+
+namespace {
+
+uint8_t param_id(Param p) {
+  return static_cast<uint8_t>(p);
+}
+
+int32_t clamp_to_spec(Param p, int32_t value) {
+  ParamSpec spec;
+  if (!param_spec(param_id(p), &spec)) return value;
+  if (value < spec.min) return spec.min;
+  return value > spec.max ? spec.max : value;
+}
+
+}  // namespace
+
+Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
+    : settings_(storage),
+      rng_(rng_seed),
+      coordinator_(rng_),
+      now_ms_(0),
+      boot_ms_(0),
+      last_rx_ms_(0),
+      next_status_ms_(0),
+      radius_um_(0),
+      pulse_us_(0),
+      servo_start_ms_(0),
+      servo_step_(0),
+      servo_kind_(0xFF),
+      round_intensity_(0),
+      record_round_(0),
+      tx_dropped_(0),
+      tx_head_(0),
+      tx_count_(0),
+      record_run_(0),
+      seq_(0),
+      reset_cause_(reset_cause),
+      rx_idle_pending_(false),
+      readings_awaited_(0) {
+  geometry_.r_min_um = 0;
+  geometry_.r_max_um = 0;
+}
+
+void Particle::begin(uint32_t now_ms) {
+  now_ms_ = now_ms;
+  boot_ms_ = now_ms;
+  settings_.load();
+  settings_.record_reset(reset_cause_);
+  refresh_geometry();
+  update_servo(now_ms, true);
+  // The first STATUS announces the particle; spreading it over one period keeps a swarm powered
+  // up together from answering all at once.
+  const uint16_t period = static_cast<uint16_t>(settings_.get(Param::STATUS_PERIOD_MS));
+  next_status_ms_ = now_ms + rng_.below(period);
+}
+
+void Particle::on_adc_sample(uint8_t sensor, uint16_t raw) {
+  if (!sampler_.on_sample(sensor, raw)) return;
+  if (readings_awaited_ > 0 && --readings_awaited_ == 0) round_intensity_ = sampler_.intensity();
+}
+
+void Particle::on_rx_byte(uint8_t byte, uint32_t now_ms) {
+  now_ms_ = now_ms;
+  last_rx_ms_ = now_ms;
+  rx_idle_pending_ = true;
+  if (parser_.push(byte)) handle_frame(parser_.frame(), now_ms);
+}
+
+void Particle::tick(uint32_t now_ms) {
+  now_ms_ = now_ms;
+  if (rx_idle_pending_ && time_reached(now_ms, last_rx_ms_ + kFrameTimeoutMs)) {
+    rx_idle_pending_ = false;
+    while (parser_.timeout()) handle_frame(parser_.frame(), now_ms);
+  }
+  for (;;) {
+    const Coordinator::Event event = coordinator_.poll(now_ms, readings_awaited_ == 0);
+    if (event == Coordinator::kNone) break;
+    if (event == Coordinator::kRoundStart) {
+      begin_round_record(coordinator_.round());
+    } else if (event == Coordinator::kBroadcast) {
+      send_intensity();
+    } else {
+      finish_round();
+    }
+  }
+  update_servo(now_ms);
+  if (time_reached(now_ms, next_status_ms_)) {
+    send_status();
+    schedule_status(now_ms);
+  }
+}
+
+size_t Particle::take_tx(uint8_t *out, size_t capacity) {
+  size_t n = 0;
+  while (n < capacity && tx_count_ > 0) {
+    out[n++] = tx_[tx_head_];
+    tx_head_ = static_cast<uint8_t>((tx_head_ + 1) % kTxCapacity);
+    --tx_count_;
+  }
+  return n;
+}
+
+uint8_t Particle::status_payload(uint8_t *out) const {
+  StatusMessage m;
+  m.state = static_cast<uint8_t>(coordinator_.state());
+  m.method = coordinator_.method();
+  m.run_id = coordinator_.run_id();
+  m.s_n = coordinator_.s_n();
+  m.group_size = coordinator_.group_size();
+  m.sensor_faults = sampler_.faults();
+  m.intensity = sampler_.intensity();
+  for (uint8_t k = 0; k < kSensorCount; ++k) m.sensors[k] = sampler_.mean(k);
+  m.cycle_phase = coordinator_.cycle_phase_permille(now_ms_);
+  m.radius_um = radius_um_;
+  m.uptime_ms = now_ms_ - boot_ms_;
+  m.definition_hash = kDefinitionHash;
+  const ParserCounters &c = parser_.counters();
+  m.rx_frames = c.frames;
+  m.rx_bad_crc = c.bad_crc;
+  m.rx_bad_length = c.bad_length;
+  m.rx_skipped_bytes = c.skipped_bytes;
+  m.resets = settings_.resets();
+  m.last_reset_cause = settings_.last_reset_cause();
+  return m.encode(out);
+}
+
+// ---- received frames ---------------------------------------------------------------------------
+
+bool Particle::addressed_to_me(uint8_t target) const {
+  return target == kBroadcastId || target == settings_.id();
+}
+
+void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
+  // Our own frames come back from some radio setups; a clash of ids is not ours to resolve.
+  if (frame.sender == settings_.id()) return;
+  if (frame.type == static_cast<uint8_t>(MessageType::INTENSITY)) {
+    IntensityMessage m;
+    if (frame.sender != kBaseStationId && m.decode(frame.payload, frame.length)) {
+      handle_intensity(frame.sender, m);
+    }
+    return;
+  }
+  // Everything else is a command, and only the base station gives commands.
+  if (frame.sender != kBaseStationId) return;
+  switch (static_cast<MessageType>(frame.type)) {
+    case MessageType::START: {
+      StartMessage m;
+      if (m.decode(frame.payload, frame.length)) handle_start(m, now_ms);
+      break;
+    }
+    case MessageType::STOP: {
+      StopMessage m;
+      if (m.decode(frame.payload, frame.length)) {
+        coordinator_.stop(now_ms, radius_at(now_ms), geometry_);
+        update_servo(now_ms);
+      }
+      break;
+    }
+    case MessageType::SET_PARAM: {
+      SetParamMessage m;
+      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
+        handle_set_param(m.param, m.value);
+      }
+      break;
+    }
+    case MessageType::GET_PARAM: {
+      GetParamMessage m;
+      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
+        int32_t value = 0;
+        const bool known = settings_.get(m.param, &value);
+        send_param_value(m.param, known ? ParamResult::OK : ParamResult::UNKNOWN_PARAM, value);
+      }
+      break;
+    }
+    case MessageType::PING: {
+      PingMessage m;
+      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) send_status();
+      break;
+    }
+    case MessageType::IDENTIFY: {
+      IdentifyMessage m;
+      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
+        coordinator_.identify(now_ms);
+        send_status();
+      }
+      break;
+    }
+    case MessageType::SET_ID: {
+      SetIdMessage m;
+      // Never by broadcast: every particle would take the same id.
+      if (m.decode(frame.payload, frame.length) && m.target == settings_.id() &&
+          m.target != kBroadcastId) {
+        settings_.set_id(m.new_id);
+        send_status();
+      }
+      break;
+    }
+    default:
+      break;  // STATUS and PARAM_VALUE are for the base station; unknown types are ignored
+  }
+}
+
+void Particle::handle_start(const StartMessage &m, uint32_t now_ms) {
+  // The console may resend START to reach every particle; only a new run restarts.
+  if (coordinator_.running() && coordinator_.run_id() == m.run_id) return;
+  RunConfig c;
+  c.run_id = m.run_id;
+  c.method = m.method <= static_cast<uint8_t>(Method::COUNTING)
+                 ? m.method
+                 : static_cast<uint8_t>(settings_.get(Param::METHOD));
+  c.cycle_steps =
+      static_cast<uint16_t>(m.cycle_steps == 0 ? settings_.get(Param::CYCLE_STEPS)
+                                               : clamp_to_spec(Param::CYCLE_STEPS, m.cycle_steps));
+  c.wave_size = m.wave_size;
+  c.wave_size_param = static_cast<uint8_t>(settings_.get(Param::WAVE_SIZE));
+  c.broadcast_repeats = static_cast<uint8_t>(settings_.get(Param::BROADCAST_REPEATS));
+  c.phototaxis = m.phototaxis != 0;
+  const uint32_t interval_s = m.update_interval_s == 0
+                                  ? static_cast<uint32_t>(settings_.get(Param::UPDATE_INTERVAL_S))
+                                  : m.update_interval_s;
+  c.update_interval_ms = interval_s * 1000u;
+  c.round_ms = static_cast<uint32_t>(settings_.get(Param::ROUND_MS));
+  coordinator_.start(c, now_ms, radius_at(now_ms), geometry_);
+  // Readings for round 0 may follow in the same burst as START, before the next tick, so the
+  // round's bookkeeping starts here rather than at the next poll.
+  record_.clear();
+  record_run_ = m.run_id;
+  record_round_ = 0;
+  begin_round_record(0);
+  update_servo(now_ms);
+}
+
+void Particle::handle_set_param(uint8_t param, int32_t value) {
+  int32_t current = 0;
+  if (!settings_.get(param, &current)) {
+    send_param_value(param, ParamResult::UNKNOWN_PARAM, 0);
+    return;
+  }
+  // Parameters shape the running schedule and the body's stroke: only change them at rest.
+  const State s = coordinator_.state();
+  if (s != State::IDLE && s != State::DONE) {
+    send_param_value(param, ParamResult::BUSY, current);
+    return;
+  }
+  const ParamResult result = settings_.set(param, value);
+  if (result == ParamResult::OK) current = value;
+  refresh_geometry();
+  update_servo(now_ms_, true);
+  send_param_value(param, result, current);
+}
+
+void Particle::handle_intensity(uint8_t sender, const IntensityMessage &m) {
+  if (!coordinator_.running() || m.run_id != coordinator_.run_id()) return;
+  const State s = coordinator_.state();
+  const uint16_t round = coordinator_.round();
+  // A particle whose clock runs a little fast may begin the next round before this one does:
+  // keep its readings for that round instead of losing them.
+  const bool current = s == State::ESTIMATING && m.round == round;
+  const bool next = (s == State::WAITING || s == State::CYCLING || s == State::PAUSED) &&
+                    m.round == static_cast<uint16_t>(round + 1);
+  if (!current && !next) return;
+  if (record_run_ != m.run_id || record_round_ != m.round) {
+    record_.clear();
+    record_run_ = m.run_id;
+    record_round_ = m.round;
+  }
+  record_.add(sender, m.intensity);
+}
+
+void Particle::begin_round_record(uint16_t round) {
+  if (record_run_ != coordinator_.run_id() || record_round_ != round) {
+    record_.clear();
+    record_run_ = coordinator_.run_id();
+    record_round_ = round;
+  }
+  readings_awaited_ = sampler_.between_readings() ? 1 : 2;
+}
+
+void Particle::finish_round() {
+  const uint16_t own = readings_awaited_ == 0 ? round_intensity_ : sampler_.intensity();
+  readings_awaited_ = 0;
+  const bool ours = record_run_ == coordinator_.run_id() && record_round_ == coordinator_.round();
+  const uint8_t heard = ours ? record_.count() : 0;
+  EstimationParams p;
+  p.ref_distance_mm = settings_.get(Param::REF_DISTANCE_MM);
+  p.ref_value = settings_.get(Param::REF_VALUE);
+  p.diameter_mm = settings_.get(Param::DIAMETER_MM);
+  p.count_tolerance = settings_.get(Param::COUNT_TOLERANCE);
+  p.groups = settings_.get(Param::GROUPS);
+  RoundResult r;
+  r.s_n = estimate(coordinator_.method(), own, record_.readings(), heard, p);
+  r.group_size = static_cast<uint8_t>(heard + 1);
+  r.intensity = own;
+  coordinator_.finish_round(r);
+}
+
+// ---- servo -------------------------------------------------------------------------------------
+
+void Particle::refresh_geometry() {
+  geometry_.r_min_um = static_cast<uint32_t>(settings_.get(Param::RADIUS_MIN_UM));
+  geometry_.r_max_um = static_cast<uint32_t>(settings_.get(Param::RADIUS_MAX_UM));
+}
+
+uint32_t Particle::radius_at(uint32_t now_ms) const {
+  return coordinator_.motion().radius_um(now_ms, geometry_);
+}
+
+void Particle::update_servo(uint32_t now_ms, bool table_changed) {
+  // The radius only changes at step boundaries, and working it out costs the AVR about a
+  // millisecond of 64-bit arithmetic: evaluate once per step, not on every loop pass.
+  const Motion &m = coordinator_.motion();
+  const uint16_t step = m.step_at(now_ms);
+  if (!table_changed && m.kind == servo_kind_ && m.start_ms == servo_start_ms_ &&
+      step == servo_step_) {
+    return;
+  }
+  servo_kind_ = m.kind;
+  servo_start_ms_ = m.start_ms;
+  servo_step_ = step;
+  const uint32_t r = m.radius_um(now_ms, geometry_);
+  if (r == radius_um_ && !table_changed) return;
+  radius_um_ = r;
+  uint16_t table[kServoTablePoints];
+  settings_.servo_table(table);
+  pulse_us_ = pb::servo_pulse_us(r, geometry_, table);
+}
+
+// ---- transmitted frames ------------------------------------------------------------------------
+
+void Particle::send(MessageType type, const uint8_t *payload, uint8_t len) {
+  uint8_t frame[kMaxPayload + kFrameOverhead];
+  const size_t n = encode_frame(static_cast<uint8_t>(type), settings_.id(), seq_, payload, len,
+                                frame, sizeof frame);
+  if (n == 0 || n > static_cast<size_t>(kTxCapacity - tx_count_)) {
+    // A partial frame would only make the base station resynchronise: drop it whole.
+    if (tx_dropped_ < 0xFFFF) ++tx_dropped_;
+    return;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    tx_[(tx_head_ + tx_count_) % kTxCapacity] = frame[i];
+    ++tx_count_;
+  }
+  ++seq_;
+}
+
+void Particle::send_status() {
+  uint8_t payload[StatusMessage::kPayloadSize];
+  send(MessageType::STATUS, payload, status_payload(payload));
+}
+
+void Particle::send_intensity() {
+  IntensityMessage m;
+  m.run_id = coordinator_.run_id();
+  m.round = coordinator_.round();
+  m.repeat = coordinator_.broadcast_repeat();
+  m.intensity = round_intensity_;
+  uint8_t payload[IntensityMessage::kPayloadSize];
+  send(MessageType::INTENSITY, payload, m.encode(payload));
+}
+
+void Particle::send_param_value(uint8_t param, ParamResult result, int32_t value) {
+  ParamValueMessage m;
+  m.param = param;
+  m.result = static_cast<uint8_t>(result);
+  m.value = value;
+  uint8_t payload[ParamValueMessage::kPayloadSize];
+  send(MessageType::PARAM_VALUE, payload, m.encode(payload));
+}
+
+void Particle::schedule_status(uint32_t now_ms) {
+  // +-25 % jitter: particles that started together drift apart instead of colliding every time.
+  const uint32_t period = static_cast<uint32_t>(settings_.get(Param::STATUS_PERIOD_MS));
+  next_status_ms_ = now_ms + period * (75u + rng_.below(51)) / 100u;
+}
+
+}  // namespace pb

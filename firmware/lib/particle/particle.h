@@ -1,0 +1,111 @@
+// The whole particle controller: radio protocol, sensing, estimation, schedule and servo target.
+#ifndef PARTICLEBOT_PARTICLE_H
+#define PARTICLEBOT_PARTICLE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "actuation.h"
+#include "coordination.h"
+#include "estimation.h"
+#include "frame.h"
+#include "light_sampler.h"
+#include "protocol_gen.h"
+#include "settings.h"
+
+namespace pb {
+
+// Driven identically by firmware/src/main.cpp (hardware) and the C API (PC). It never reads a
+// clock or a pin: the owner passes time, ADC conversions and received bytes in, and takes the
+// servo pulse and the bytes to transmit out. No call blocks or allocates.
+class Particle {
+ public:
+  // Bytes of radio output that can wait for Serial1; a frame that does not fit is dropped whole.
+  static const uint8_t kTxCapacity = 128;
+
+  // reset_cause: MCUSR at boot (reported in STATUS). rng_seed: anything that differs between
+  // particles (ADC noise on the real one) so their STATUS and INTENSITY timings spread out.
+  Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed);
+
+  // Loads the id and settings (defaults and the unassigned id if the EEPROM is blank or corrupt)
+  // and counts the reset. Call once before anything else.
+  void begin(uint32_t now_ms);
+
+  // Sensor index 0..5 (pin A0..A5) whose ADC conversion is wanted next.
+  uint8_t next_sensor() const { return sampler_.next_sensor(); }
+  // One 10-bit conversion of that sensor; 50 per sensor make a reading.
+  void on_adc_sample(uint8_t sensor, uint16_t raw);
+  // A byte from Serial1. Commands act at once (STOP starts the ramp from this instant).
+  void on_rx_byte(uint8_t byte, uint32_t now_ms);
+  // Runs whatever fell due by now_ms: schedule transitions, broadcasts, STATUS, servo target.
+  // Call often (every loop pass); a late call catches up without shifting the schedule.
+  void tick(uint32_t now_ms);
+
+  // Pulse the servo driver must output from its next 50 Hz frame (500..2500 us).
+  uint16_t servo_pulse_us() const { return pulse_us_; }
+  uint32_t radius_um() const { return radius_um_; }
+  // Moves up to capacity queued bytes into out; returns how many.
+  size_t take_tx(uint8_t *out, size_t capacity);
+  uint8_t id() const { return settings_.id(); }
+
+  // ---- inspection, for the PC build and tests ----
+  State state() const { return coordinator_.state(); }
+  // STATUS payload as it would be sent now (StatusMessage::kPayloadSize bytes into out).
+  uint8_t status_payload(uint8_t *out) const;
+  size_t tx_pending() const { return tx_count_; }
+  uint16_t tx_dropped_frames() const { return tx_dropped_; }
+  const Settings &settings() const { return settings_; }
+  const LightSampler &sampler() const { return sampler_; }
+  const Coordinator &coordinator() const { return coordinator_; }
+
+ private:
+  void handle_frame(const Frame &frame, uint32_t now_ms);
+  void handle_start(const StartMessage &m, uint32_t now_ms);
+  void handle_set_param(uint8_t param, int32_t value);
+  void handle_intensity(uint8_t sender, const IntensityMessage &m);
+  void begin_round_record(uint16_t round);
+  void finish_round();
+  void refresh_geometry();
+  void update_servo(uint32_t now_ms, bool table_changed = false);
+  uint32_t radius_at(uint32_t now_ms) const;
+  void send(MessageType type, const uint8_t *payload, uint8_t len);
+  void send_status();
+  void send_intensity();
+  void send_param_value(uint8_t param, ParamResult result, int32_t value);
+  void schedule_status(uint32_t now_ms);
+  bool addressed_to_me(uint8_t target) const;
+
+  Settings settings_;
+  LightSampler sampler_;
+  FrameParser parser_;
+  Rng rng_;
+  Coordinator coordinator_;
+  IntensityRecord record_;
+  Geometry geometry_;
+  uint8_t tx_[kTxCapacity];
+  uint32_t now_ms_;
+  uint32_t boot_ms_;
+  uint32_t last_rx_ms_;
+  uint32_t next_status_ms_;
+  uint32_t radius_um_;
+  uint16_t pulse_us_;
+  uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
+  uint16_t servo_step_;
+  uint8_t servo_kind_;
+  uint16_t round_intensity_;  // the reading this round uses and broadcasts
+  uint16_t record_round_;     // which round of record_run_ record_ holds
+  uint16_t tx_dropped_;
+  uint8_t tx_head_;
+  uint8_t tx_count_;
+  uint8_t record_run_;
+  uint8_t seq_;
+  uint8_t reset_cause_;
+  bool rx_idle_pending_;  // bytes arrived since the last parser timeout
+  // Readings still to complete before the round's own: 2 when a round starts mid-reading (that
+  // reading mixes in light from before the round), 1 otherwise, 0 once round_intensity_ is set.
+  uint8_t readings_awaited_;
+};
+
+}  // namespace pb
+
+#endif  // PARTICLEBOT_PARTICLE_H

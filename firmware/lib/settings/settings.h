@@ -1,0 +1,97 @@
+// Persistent settings: the EEPROM layout, parameters with their ranges, id and reset bookkeeping.
+#ifndef PARTICLEBOT_SETTINGS_H
+#define PARTICLEBOT_SETTINGS_H
+
+#include <stdint.h>
+
+#include "protocol_gen.h"
+
+namespace pb {
+
+// The 1 KB EEPROM, reached through the owner: avr-libc's eeprom_* on the particle, a RAM array on
+// the PC. Never deleted through this interface, hence no virtual destructor (which would drag
+// operator delete into the AVR build).
+class Storage {
+ public:
+  virtual uint8_t read(uint16_t address) const = 0;
+  virtual void write(uint16_t address, uint8_t value) = 0;
+
+ protected:
+  ~Storage() {}
+};
+
+const uint16_t kEepromSize = 1024;
+const uint8_t kServoTablePoints = 9;
+
+// EEPROM layout, all little-endian, one block from address 0:
+//   0-1 magic 'P' 'B' | 2 layout version | 3 parameter count | 4 id | 5 resets | 6 last reset cause
+//   7.. one int32 per parameter id 0..kParamSlots - 1 (ids the protocol lacks hold 0) | CRC-16 of
+//   bytes 0 .. the last value (CCITT-FALSE, as on the radio).
+// Indexing by parameter id wastes a little EEPROM (of 1 KB) but no flash on lookups. The values
+// are not mirrored in RAM: they are read from the EEPROM when used (a few microseconds each),
+// which keeps about 90 bytes of the 2.5 KB SRAM free.
+namespace eeprom_layout {
+const uint8_t kMagic0 = 'P';
+const uint8_t kMagic1 = 'B';
+const uint8_t kVersion = 1;
+const uint16_t kVersionAddress = 2;
+const uint16_t kCountAddress = 3;
+const uint16_t kIdAddress = 4;
+const uint16_t kResetsAddress = 5;
+const uint16_t kResetCauseAddress = 6;
+const uint16_t kParamsAddress = 7;
+// Parameter ids must stay below this (a unit test checks the generated table).
+const uint8_t kParamSlots = 64;
+const uint16_t kCrcAddress = kParamsAddress + 4u * kParamSlots;
+const uint16_t kBlockSize = kCrcAddress + 2;
+}  // namespace eeprom_layout
+
+// True when the nine pulses never decrease or never increase (a servo mounted either way round).
+bool servo_table_monotonic(const uint16_t table[kServoTablePoints]);
+
+class Settings {
+ public:
+  explicit Settings(Storage &storage);
+
+  // Checks the stored block. A blank or corrupt one (bad magic, version, count or CRC) is
+  // replaced by the defaults with the unassigned id and no resets.
+  // Returns true when the block was valid.
+  bool load();
+  // Counts a reset (saturating at 255) and stores its cause (MCUSR).
+  void record_reset(uint8_t cause);
+
+  uint8_t id() const { return id_; }
+  // Any id but the base station's, broadcast and unassigned (1..253); false otherwise.
+  bool set_id(uint8_t id);
+  uint8_t resets() const { return resets_; }
+  uint8_t last_reset_cause() const { return reset_cause_; }
+
+  // False for an unknown parameter id.
+  bool get(uint8_t param, int32_t *value) const;
+  // The value of a known parameter.
+  int32_t get(Param param) const;
+  // Range checks, then stores the value, writing only the bytes that change. RADIUS_MIN_UM must
+  // stay below RADIUS_MAX_UM and the servo table monotonic, or OUT_OF_RANGE. (BUSY is the
+  // caller's decision.)
+  ParamResult set(uint8_t param, int32_t value);
+  void servo_table(uint16_t table[kServoTablePoints]) const;
+
+ private:
+  bool block_valid() const;
+  void write_defaults();
+  uint16_t compute_crc() const;
+  void update_crc();
+  int32_t read_value(uint8_t param) const;
+  void write_value(uint8_t param, int32_t value);
+  void write_byte(uint16_t address, uint8_t value);
+  bool acceptable(uint8_t param, int32_t value) const;
+
+  Storage &storage_;
+  uint8_t id_;
+  uint8_t resets_;
+  uint8_t reset_cause_;
+};
+
+}  // namespace pb
+
+#endif  // PARTICLEBOT_SETTINGS_H

@@ -1,0 +1,136 @@
+// Unit tests of the S_n estimators (SI section S4) and the per-round record of readings.
+#include <doctest.h>
+#include <math.h>
+
+#include "estimation.h"
+#include "protocol_gen.h"
+
+namespace {
+
+const uint8_t kDirect = static_cast<uint8_t>(pb::Method::DIRECT);
+const uint8_t kLinear = static_cast<uint8_t>(pb::Method::LINEAR);
+const uint8_t kNonlinear = static_cast<uint8_t>(pb::Method::NONLINEAR);
+const uint8_t kCounting = static_cast<uint8_t>(pb::Method::COUNTING);
+
+pb::EstimationParams paper_params() {
+  pb::EstimationParams p;
+  p.ref_distance_mm = 280;
+  p.ref_value = 980;
+  p.diameter_mm = 155;
+  p.count_tolerance = 10;
+  p.groups = 0;
+  return p;
+}
+
+// Eq. 11 with the SI's calibration (V_x = 980 at r_x = 280 mm, R_R = 1.5 MOhm): the reading of a
+// photocell at distance r_mm from the lamp, unrounded.
+double reading_at(double r_mm) {
+  const double r_r = 1.5e6;
+  const double r_x = (1023.0 - 980.0) * r_r / 980.0;  // eq. 13
+  const double r_n = (r_mm / 280.0) * (r_mm / 280.0) * r_x;
+  return 1023.0 * r_r / (r_n + r_r);
+}
+
+}  // namespace
+
+TEST_CASE("direct estimation ranks a particle by diameters from the point under the lamp") {
+  const pb::EstimationParams p = paper_params();
+  for (int k = 0; k < 6; ++k) {
+    // k diameters along the floor from the reference point, 280 mm under the lamp.
+    const double planar = 155.0 * k;
+    const uint16_t v =
+        static_cast<uint16_t>(lround(reading_at(sqrt(280.0 * 280.0 + planar * planar))));
+    CHECK(pb::estimate(kDirect, v, NULL, 0, p) == k + 1);
+  }
+}
+
+TEST_CASE("direct estimation handles the ends of the ADC range and odd parameters") {
+  pb::EstimationParams p = paper_params();
+  CHECK(pb::estimate_direct(0, p) == 255);
+  CHECK(pb::estimate_direct(1023, p) == 1);
+  CHECK(pb::estimate_direct(2000, p) == 1);
+  CHECK(pb::estimate_direct(980, p) == 1);
+  CHECK(pb::estimate_direct(1, p) == 255);
+  p.ref_value = 5000;  // clamped to 1022
+  p.diameter_mm = 0;   // clamped to 10
+  p.ref_distance_mm = -3;
+  const uint8_t s = pb::estimate_direct(500, p);
+  CHECK(s >= 1);
+}
+
+TEST_CASE("linear estimation splits the group's intensity range into equal bands") {
+  const uint16_t group[] = {1000, 800, 600, 400, 200};
+  const uint8_t expected[] = {1, 2, 3, 4, 5};
+  for (int i = 0; i < 5; ++i) {
+    uint16_t others[4];
+    int n = 0;
+    for (int j = 0; j < 5; ++j) {
+      if (j != i) others[n++] = group[j];
+    }
+    // dV = 160: (1000 - V) / 160 floored, the weakest clamped into the last band.
+    CHECK(pb::estimate(kLinear, group[i], others, 4, paper_params()) == expected[i]);
+  }
+  const uint16_t two_groups[] = {1000, 200};
+  CHECK(pb::estimate_linear(599, two_groups, 2, 2) == 2);
+  CHECK(pb::estimate_linear(601, two_groups, 2, 2) == 1);
+}
+
+TEST_CASE("linear and nonlinear estimation give 1 to a lone particle or a uniform group") {
+  const uint16_t same[] = {500, 500, 500};
+  CHECK(pb::estimate_linear(500, same, 3, 0) == 1);
+  CHECK(pb::estimate_nonlinear(500, same, 3, 0) == 1);
+  CHECK(pb::estimate_linear(500, NULL, 0, 0) == 1);
+  CHECK(pb::estimate_nonlinear(500, NULL, 0, 0) == 1);
+  const uint16_t clamped_alike[] = {0, 1};  // both read as 1 once clamped
+  CHECK(pb::estimate_nonlinear(0, clamped_alike, 2, 0) == 1);
+}
+
+TEST_CASE("nonlinear estimation recovers positions from an inverse-square field") {
+  // Particles at (K + n) D from the lamp in a plane, n = 0..4, as in Fig. S7; rho = n / 4.
+  const double d = 155.0;
+  const double k = 2.0;
+  uint16_t v[5];
+  for (int n = 0; n < 5; ++n) v[n] = static_cast<uint16_t>(lround(reading_at((k + n) * d)));
+  for (int i = 0; i < 5; ++i) {
+    uint16_t others[4];
+    int m = 0;
+    for (int j = 0; j < 5; ++j) {
+      if (j != i) others[m++] = v[j];
+    }
+    // N_w = 5: floor(5 * i / 4) = 0, 1, 2, 3, 5 -> clamped 4.
+    CHECK(pb::estimate(kNonlinear, v[i], others, 4, paper_params()) == i + 1);
+  }
+}
+
+TEST_CASE("counting estimation counts distinct stronger levels whatever the arrival order") {
+  const uint16_t heard[] = {800, 805, 700, 600, 400};
+  CHECK(pb::estimate_counting(500, heard, 5, 10) == 4);  // 805, 700, 600 (800 joins 805)
+  const uint16_t reversed[] = {400, 600, 700, 805, 800};
+  CHECK(pb::estimate_counting(500, reversed, 5, 10) == 4);
+  CHECK(pb::estimate_counting(500, heard, 5, 0) == 5);
+  CHECK(pb::estimate_counting(900, heard, 5, 10) == 1);
+  // A chain of readings 8 apart: distance is measured from the last counted level, so 532 and
+  // 516 count while 524 and 508 join them.
+  const uint16_t chain[] = {508, 516, 524, 532};
+  CHECK(pb::estimate_counting(500, chain, 4, 10) == 3);
+  CHECK(pb::estimate_counting(500, heard, 0, 10) == 1);
+}
+
+TEST_CASE("an unknown method gives 0") {
+  CHECK(pb::estimate(4, 500, NULL, 0, paper_params()) == 0);
+}
+
+TEST_CASE("the record keeps one reading per sender and at most 32 senders") {
+  pb::IntensityRecord r;
+  CHECK(r.add(7, 100));
+  CHECK(r.add(7, 120));
+  CHECK(r.count() == 1);
+  CHECK(r.readings()[0] == 120);
+  for (uint8_t s = 0; s < 31; ++s) CHECK(r.add(static_cast<uint8_t>(100 + s), s));
+  CHECK(r.count() == 32);
+  CHECK_FALSE(r.add(1, 5));
+  CHECK(r.add(7, 130));  // a known sender still updates when full
+  CHECK(r.readings()[0] == 130);
+  r.clear();
+  CHECK(r.count() == 0);
+}

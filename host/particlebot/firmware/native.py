@@ -1,0 +1,347 @@
+"""ctypes binding of the firmware logic built for the PC (firmware/lib/capi/particle_capi.h).
+
+The virtual particles and the firmware-logic tests drive the very C++ that is flashed onto a
+particle through this module. The library is looked up in this order: the PARTICLEBOT_NATIVE_LIB
+environment variable, then <repo>/build/native/libparticle.so; in a source checkout a missing
+library is built once with `make native`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import subprocess
+import sys
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+from particlebot.protocol.generated import Method, Status
+
+SENSOR_COUNT = 6
+EEPROM_SIZE = 1024
+_STATUS_CAPACITY = 64
+_TX_CHUNK = 4096
+
+ENV_VAR = "PARTICLEBOT_NATIVE_LIB"
+_REPO_ROOT = Path(__file__).resolve().parents[3]
+DEFAULT_LIBRARY = _REPO_ROOT / "build" / "native" / "libparticle.so"
+
+
+class NativeLibraryError(OSError):
+    """The native firmware library is missing or cannot be loaded."""
+
+
+_U8P = ctypes.POINTER(ctypes.c_uint8)
+_U16P = ctypes.POINTER(ctypes.c_uint16)
+
+_lock = threading.Lock()
+_library: ctypes.CDLL | None = None
+
+
+def _declare(lib: ctypes.CDLL) -> None:
+    """Gives every C function its signature, so ctypes converts and checks arguments."""
+    handle = ctypes.c_void_p
+    signatures: dict[str, tuple[object, list[object]]] = {
+        "pb_particle_new": (handle, [_U8P, ctypes.c_size_t, ctypes.c_uint8, ctypes.c_uint32]),
+        "pb_particle_free": (None, [handle]),
+        "pb_particle_set_adc": (None, [handle, _U16P]),
+        "pb_particle_receive": (None, [handle, _U8P, ctypes.c_size_t]),
+        "pb_particle_tick": (None, [handle, ctypes.c_uint32]),
+        "pb_particle_transmit": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
+        "pb_particle_id": (ctypes.c_uint8, [handle]),
+        "pb_particle_servo_pulse_us": (ctypes.c_uint16, [handle]),
+        "pb_particle_radius_um": (ctypes.c_uint32, [handle]),
+        "pb_particle_status_payload": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
+        "pb_particle_eeprom": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
+        "pb_definition_hash": (ctypes.c_uint32, []),
+        "pb_estimate": (
+            ctypes.c_uint8,
+            [
+                ctypes.c_uint8,
+                ctypes.c_uint16,
+                _U16P,
+                ctypes.c_size_t,
+                ctypes.c_int32,
+                ctypes.c_int32,
+                ctypes.c_int32,
+                ctypes.c_int32,
+                ctypes.c_int32,
+            ],
+        ),
+        "pb_encode_frame": (
+            ctypes.c_size_t,
+            [
+                ctypes.c_uint8,
+                ctypes.c_uint8,
+                ctypes.c_uint8,
+                _U8P,
+                ctypes.c_size_t,
+                _U8P,
+                ctypes.c_size_t,
+            ],
+        ),
+        "pb_parse_stream": (
+            ctypes.c_size_t,
+            [_U8P, ctypes.c_size_t, _U8P, ctypes.c_size_t, _U16P],
+        ),
+    }
+    for name, (restype, argtypes) in signatures.items():
+        function = getattr(lib, name)
+        function.restype = restype
+        function.argtypes = argtypes
+
+
+def _build_once(root: Path) -> None:
+    print(
+        f"particlebot: building the native firmware library (make -C {root} native)...",
+        file=sys.stderr,
+    )
+    result = subprocess.run(
+        ["make", "-C", str(root), "native"], capture_output=True, text=True, check=False
+    )
+    if result.returncode != 0:
+        raise NativeLibraryError(
+            f"`make native` failed (exit {result.returncode}):\n{result.stderr[-2000:]}"
+        )
+
+
+def library_path() -> Path:
+    """Where the library is looked for (it may not exist yet)."""
+    override = os.environ.get(ENV_VAR)
+    return Path(override) if override else DEFAULT_LIBRARY
+
+
+def load_library() -> ctypes.CDLL:
+    """The loaded library, built first with `make native` when missing in a source checkout."""
+    global _library
+    with _lock:
+        if _library is not None:
+            return _library
+        path = library_path()
+        if not path.exists() and ENV_VAR not in os.environ and (_REPO_ROOT / "Makefile").exists():
+            _build_once(_REPO_ROOT)
+        if not path.exists():
+            raise NativeLibraryError(
+                f"native firmware library not found at {path}: run `make native`"
+                + (f" or fix {ENV_VAR}" if ENV_VAR in os.environ else "")
+            )
+        try:
+            lib = ctypes.CDLL(str(path))
+            _declare(lib)
+        except (OSError, AttributeError) as exc:
+            raise NativeLibraryError(
+                f"cannot load {path} ({exc}): rebuild it with `make native`"
+            ) from exc
+        _library = lib
+        return lib
+
+
+def _bytes_arg(data: bytes | bytearray) -> ctypes.Array[ctypes.c_uint8]:
+    return (ctypes.c_uint8 * len(data)).from_buffer_copy(bytes(data))
+
+
+def _u16_array(values: Sequence[int]) -> ctypes.Array[ctypes.c_uint16]:
+    for v in values:
+        if not 0 <= v <= 0xFFFF:
+            raise ValueError(f"{v} does not fit 16 bits")
+    return (ctypes.c_uint16 * len(values))(*values)
+
+
+class NativeParticle:
+    """One particle: the firmware's Particle class with a RAM EEPROM and a simulated ADC.
+
+    Time is whatever the caller says: tick(now_ms) advances the logic to now_ms, drawing ADC
+    samples from the values last given to set_adc() as the real main loop would (one conversion
+    per 125 us). Bytes passed to receive() arrive at the time of the last tick.
+    """
+
+    def __init__(
+        self, eeprom: bytes | None = None, reset_cause: int = 1, rng_seed: int = 1
+    ) -> None:
+        self._lib = load_library()
+        image = _bytes_arg(eeprom) if eeprom else None
+        length = len(eeprom) if eeprom else 0
+        handle = self._lib.pb_particle_new(image, length, reset_cause, rng_seed & 0xFFFFFFFF)
+        if not handle:
+            raise MemoryError("pb_particle_new failed")
+        self._handle: int | None = handle
+        self._now_ms = 0
+
+    def _h(self) -> int:
+        if self._handle is None:
+            raise ValueError("the particle is closed")
+        return self._handle
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._lib.pb_particle_free(self._handle)
+            self._handle = None
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        # Only when the interpreter is not tearing the module down already.
+        if getattr(self, "_handle", None) is not None and _library is not None:
+            self.close()
+
+    def set_adc(self, values: Sequence[int]) -> None:
+        """Raw readings (0..1023) of photocells A0..A5 from now on."""
+        if len(values) != SENSOR_COUNT:
+            raise ValueError(f"need {SENSOR_COUNT} ADC values, got {len(values)}")
+        self._lib.pb_particle_set_adc(self._h(), _u16_array(values))
+
+    def receive(self, data: bytes | bytearray) -> None:
+        """Bytes arriving on the particle's Serial1."""
+        if data:
+            self._lib.pb_particle_receive(self._h(), _bytes_arg(data), len(data))
+
+    def tick(self, now_ms: int) -> None:
+        """Advance to now_ms (call at least every 5 ms of simulated time)."""
+        self._now_ms = now_ms
+        self._lib.pb_particle_tick(self._h(), now_ms & 0xFFFFFFFF)
+
+    @property
+    def now_ms(self) -> int:
+        """The time of the last tick()."""
+        return self._now_ms
+
+    def transmit(self, limit: int = _TX_CHUNK) -> bytes:
+        """Everything queued for Serial1 (at most limit bytes), removed from the queue."""
+        out = bytearray()
+        buffer = (ctypes.c_uint8 * min(limit, _TX_CHUNK))()
+        while len(out) < limit:
+            n = self._lib.pb_particle_transmit(
+                self._h(), buffer, min(len(buffer), limit - len(out))
+            )
+            if n == 0:
+                break
+            out += bytes(buffer[:n])
+        return bytes(out)
+
+    @property
+    def id(self) -> int:
+        return int(self._lib.pb_particle_id(self._h()))
+
+    @property
+    def servo_pulse_us(self) -> int:
+        return int(self._lib.pb_particle_servo_pulse_us(self._h()))
+
+    @property
+    def radius_um(self) -> int:
+        return int(self._lib.pb_particle_radius_um(self._h()))
+
+    def status_payload(self) -> bytes:
+        """The STATUS payload the particle would send now."""
+        buffer = (ctypes.c_uint8 * _STATUS_CAPACITY)()
+        n = self._lib.pb_particle_status_payload(self._h(), buffer, len(buffer))
+        return bytes(buffer[:n])
+
+    def status(self) -> Status:
+        """The STATUS the particle would send now, decoded."""
+        return Status.decode_payload(self.status_payload())
+
+    def eeprom(self) -> bytes:
+        """A copy of the EEPROM image (EEPROM_SIZE bytes)."""
+        buffer = (ctypes.c_uint8 * EEPROM_SIZE)()
+        n = self._lib.pb_particle_eeprom(self._h(), buffer, len(buffer))
+        return bytes(buffer[:n])
+
+
+# ---- pure functions ------------------------------------------------------------------------------
+
+
+def definition_hash() -> int:
+    """The protocol definition hash the library was built with."""
+    return int(load_library().pb_definition_hash())
+
+
+def estimate(
+    method: Method | int,
+    own: int,
+    others: Sequence[int],
+    *,
+    ref_distance_mm: int = 280,
+    ref_value: int = 980,
+    diameter_mm: int = 155,
+    count_tolerance: int = 10,
+    groups: int = 0,
+) -> int:
+    """S_n from the firmware's estimator for own reading among others (defaults: the params')."""
+    lib = load_library()
+    array = _u16_array(list(others)) if others else None
+    return int(
+        lib.pb_estimate(
+            int(method),
+            own,
+            array,
+            len(others),
+            ref_distance_mm,
+            ref_value,
+            diameter_mm,
+            count_tolerance,
+            groups,
+        )
+    )
+
+
+def encode_frame(frame_type: int, sender: int, seq: int, payload: bytes) -> bytes:
+    """The firmware encoder's frame; raises ValueError when the payload is too long."""
+    lib = load_library()
+    out = (ctypes.c_uint8 * (len(payload) + 8))()
+    data = _bytes_arg(payload) if payload else None
+    n = lib.pb_encode_frame(frame_type, sender, seq, data, len(payload), out, len(out))
+    if n == 0:
+        raise ValueError(f"payload of {len(payload)} bytes does not fit a frame")
+    return bytes(out[:n])
+
+
+@dataclass(frozen=True)
+class ParsedFrame:
+    """A frame the firmware's parser accepted."""
+
+    type: int
+    sender: int
+    seq: int
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class ParseCounters:
+    """The parser's counters, as STATUS reports them."""
+
+    frames: int
+    bad_crc: int
+    bad_length: int
+    skipped_bytes: int
+
+
+def parse_stream(data: bytes | bytearray) -> tuple[list[ParsedFrame], ParseCounters]:
+    """Runs the firmware's streaming parser over data: the frames it accepts and its counters."""
+    lib = load_library()
+    # Accepted frames never share bytes and each shrinks by its 4 bytes of sync and CRC here.
+    capacity = max(len(data), 1)
+    out = (ctypes.c_uint8 * capacity)()
+    counters = (ctypes.c_uint16 * 4)()
+    source = _bytes_arg(data) if data else None
+    n = lib.pb_parse_stream(source, len(data), out, capacity, counters)
+    raw = bytes(out[:n])
+    frames: list[ParsedFrame] = []
+    i = 0
+    while i < len(raw):
+        length = raw[i + 3]
+        frames.append(ParsedFrame(raw[i], raw[i + 1], raw[i + 2], raw[i + 4 : i + 4 + length]))
+        i += 4 + length
+    return frames, ParseCounters(*counters)

@@ -1,0 +1,187 @@
+"""Properties of the firmware's S_n estimators (SI section S4) against independent Python."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from particlebot.firmware.native import estimate
+from particlebot.protocol import PARAM_SPECS, Method, Param
+from tests.firmware.conftest import (
+    DIAMETER_M,
+    LAMP_HEIGHT_M,
+    REF_DISTANCE_M,
+    REF_VALUE,
+    reading_at,
+    reading_on_floor,
+)
+
+METHODS = list(Method)
+ground_distances = st.lists(
+    st.floats(min_value=0.0, max_value=3.0, allow_nan=False), min_size=1, max_size=14
+)
+
+
+def others_than(values: list[int], i: int) -> list[int]:
+    return values[:i] + values[i + 1 :]
+
+
+@settings(max_examples=150, deadline=None)
+@given(distances=ground_distances, method=st.sampled_from(METHODS))
+def test_s_n_never_decreases_with_distance_to_the_light(
+    distances: list[float], method: Method
+) -> None:
+    readings = [reading_on_floor(d) for d in distances]
+    ranked = sorted(
+        (d, estimate(method, v, others_than(readings, i)))
+        for i, (d, v) in enumerate(zip(distances, readings, strict=True))
+    )
+    s_values = [s for _, s in ranked]
+    assert all(1 <= s <= 255 for s in s_values)
+    assert s_values == sorted(s_values), ranked
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    method=st.integers(0, 255),
+    own=st.integers(0, 0xFFFF),
+    others=st.lists(st.integers(0, 0xFFFF), max_size=40),
+    params=st.tuples(*[st.integers(-(2**31), 2**31 - 1)] * 5),
+)
+def test_estimate_accepts_any_input_and_answers_in_range(
+    method: int, own: int, others: list[int], params: tuple[int, int, int, int, int]
+) -> None:
+    ref_distance, ref_value, diameter, tolerance, groups = params
+    s = estimate(
+        method,
+        own,
+        others,
+        ref_distance_mm=ref_distance,
+        ref_value=ref_value,
+        diameter_mm=diameter,
+        count_tolerance=tolerance,
+        groups=groups,
+    )
+    if method in set(Method):
+        assert 1 <= s <= 255
+    else:
+        assert s == 0
+
+
+def stronger_levels(own: int, others: list[int], tolerance: int) -> int:
+    """Algorithm 4 over the stronger readings in descending order (the brief's fixed order)."""
+    levels: list[int] = []
+    for v in sorted((v for v in others if v > own), reverse=True):
+        if not levels or levels[-1] - v > tolerance:
+            levels.append(v)
+    return len(levels)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    own=st.integers(0, 1023),
+    others=st.lists(st.integers(0, 1023), max_size=32),
+    tolerance=st.integers(0, 200),
+)
+def test_counting_gives_one_plus_the_distinct_stronger_levels(
+    own: int, others: list[int], tolerance: int
+) -> None:
+    expected = min(255, 1 + stronger_levels(own, others, tolerance))
+    s = estimate(Method.COUNTING, own, others, count_tolerance=tolerance)
+    assert s == expected
+    assert estimate(Method.COUNTING, own, list(reversed(others)), count_tolerance=tolerance) == s
+
+
+def direct_index(v: int, r_x: int, v_x: int, diameter: int) -> float | None:
+    """Eqs. 14-16 in floating point: D_n / D, or None at the ends of the ADC range."""
+    if v <= 0 or v >= 1023:
+        return None
+    r_n2 = v_x * (1023 - v) / (v * (1023 - v_x)) * r_x**2  # eq. 14
+    d_n = math.sqrt(max(0.0, r_n2 - r_x**2))  # eq. 15
+    return d_n / diameter  # eq. 16
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    v=st.integers(0, 1100),
+    r_x=st.integers(PARAM_SPECS[Param.REF_DISTANCE_MM].min, PARAM_SPECS[Param.REF_DISTANCE_MM].max),
+    v_x=st.integers(PARAM_SPECS[Param.REF_VALUE].min, PARAM_SPECS[Param.REF_VALUE].max),
+    diameter=st.integers(PARAM_SPECS[Param.DIAMETER_MM].min, PARAM_SPECS[Param.DIAMETER_MM].max),
+)
+def test_direct_estimation_follows_eqs_14_to_16(v: int, r_x: int, v_x: int, diameter: int) -> None:
+    s = estimate(Method.DIRECT, v, [], ref_distance_mm=r_x, ref_value=v_x, diameter_mm=diameter)
+    index = direct_index(v, r_x, v_x, diameter)
+    if index is None:
+        assert s == (255 if v <= 0 else 1)
+        return
+    expected = min(255, 1 + math.floor(index + 0.5))
+    if abs(index % 1 - 0.5) < 1e-6:  # a tie within float error: either neighbour
+        assert s in (expected - 1, expected)
+    else:
+        assert s == expected
+
+
+def test_direct_estimation_with_the_papers_reference_counts_diameters_from_under_the_lamp() -> None:
+    for k in range(8):
+        v = reading_on_floor(k * DIAMETER_M)
+        assert estimate(Method.DIRECT, v, []) == k + 1
+    assert reading_on_floor(0.0) == REF_VALUE and LAMP_HEIGHT_M == REF_DISTANCE_M
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    own=st.integers(0, 1023),
+    others=st.lists(st.integers(0, 1023), max_size=32),
+    groups=st.integers(0, 64),
+)
+def test_linear_estimation_follows_eqs_17_and_18(own: int, others: list[int], groups: int) -> None:
+    group = [own, *others]
+    v_max, v_min = max(group), min(group)
+    n_w = groups if groups > 0 else len(group)
+    if not others or v_max == v_min:
+        expected = 1
+    else:
+        delta = Fraction(v_max - v_min, n_w)  # eq. 17
+        expected = 1 + min(math.floor((v_max - own) / delta), n_w - 1)  # eq. 18, 1-based
+    assert estimate(Method.LINEAR, own, others, groups=groups) == expected
+
+
+def nonlinear_index(own: int, others: list[int], groups: int) -> int:
+    """Eqs. 29-30 in floating point, readings clamped to 1..1022."""
+
+    def root(v: int) -> float:
+        v = min(max(v, 1), 1022)
+        return math.sqrt((1023 - v) / v)
+
+    group = [own, *others]
+    a, b, c = root(max(group)), root(min(group)), root(own)
+    if not others or b <= a:
+        return 1
+    n_w = groups if groups > 0 else len(group)
+    rho = (c - a) / (b - a)  # eq. 29
+    return 1 + min(math.floor(n_w * rho), n_w - 1)  # eq. 30
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    own=st.integers(0, 1023),
+    others=st.lists(st.integers(0, 1023), max_size=32),
+    groups=st.integers(0, 64),
+)
+def test_nonlinear_estimation_follows_eqs_29_and_30_to_one_group(
+    own: int, others: list[int], groups: int
+) -> None:
+    # The firmware takes the square roots in 11-bit fixed point, so a particle right on a group
+    # boundary may land in the neighbouring group.
+    expected = nonlinear_index(own, others, groups)
+    assert abs(estimate(Method.NONLINEAR, own, others, groups=groups) - expected) <= 1
+
+
+def test_nonlinear_estimation_places_a_line_of_particles_exactly() -> None:
+    # Fig. S7's planar field: five particles at (K + n) D from the lamp, K = 2.
+    readings = [reading_at((2 + k) * DIAMETER_M) for k in range(5)]
+    for k, v in enumerate(readings):
+        assert estimate(Method.NONLINEAR, v, others_than(readings, k)) == k + 1

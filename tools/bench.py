@@ -1,0 +1,35 @@
+#!/usr/bin/env python3
+"""Runs every benchmark whose figures README reports, one after another (`make bench`)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# Each entry: a heading and the command that prints its figures. Order: cheapest first, so a
+# reader sees results early; the emulator benchmark runs K simavr processes and takes minutes.
+BENCHMARKS: list[tuple[str, list[str]]] = [
+    ("Firmware image size against the budget", ["make", "-s", "firmware"]),
+    ("Host protocol decoder", [sys.executable, "tools/bench_decoder.py"]),
+    ("Host receive path and virtual swarm", [sys.executable, "tools/bench_host.py"]),
+    ("Firmware in the loop (simavr)", [sys.executable, "tools/bench_sim.py"]),
+]
+
+
+def main() -> int:
+    failed = []
+    for index, (title, command) in enumerate(BENCHMARKS, start=1):
+        print(f"\n== [{index}/{len(BENCHMARKS)}] {title}: {' '.join(command)}", flush=True)
+        if subprocess.run(command, cwd=ROOT, check=False).returncode != 0:
+            failed.append(title)
+    if failed:
+        print(f"\nfailed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

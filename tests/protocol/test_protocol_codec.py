@@ -8,6 +8,7 @@ import tomllib
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from particlebot.protocol import (
     BASE_STATION_ID,
     BROADCAST_ID,
@@ -33,7 +34,6 @@ from particlebot.protocol import (
     encode_frame,
 )
 from particlebot.protocol.frames import encode_raw_frame
-
 from tests.protocol.protocol_reference import DEFINITION, bitwise_crc16
 
 MESSAGE_CLASSES = sorted(MESSAGES.values(), key=lambda cls: cls.MESSAGE_TYPE)

@@ -12,8 +12,8 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
-from particlebot.protocol import DEFINITION_HASH
 
+from particlebot.protocol import DEFINITION_HASH
 from tests.protocol.protocol_reference import DEFINITION, REPO_ROOT
 
 GENERATOR = REPO_ROOT / "tools" / "gen_protocol.py"

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from particlebot.protocol import SYNC, StreamDecoder
 from particlebot.protocol.frames import encode_raw_frame
-
 from tests.protocol.protocol_reference import REPO_ROOT
 
 _u8p = ctypes.POINTER(ctypes.c_uint8)

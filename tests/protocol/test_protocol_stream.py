@@ -7,6 +7,7 @@ from collections.abc import Hashable
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from particlebot.protocol import (
     SYNC,
     DropEvent,
@@ -20,7 +21,6 @@ from particlebot.protocol import (
     encode_frame,
 )
 from particlebot.protocol.frames import encode_raw_frame
-
 from tests.protocol.protocol_reference import reference_scan
 
 SYNC0, SYNC1 = SYNC

@@ -6,6 +6,7 @@ import dataclasses
 from typing import Any
 
 import pytest
+
 from particlebot.protocol import (
     MESSAGES,
     Frame,
@@ -15,7 +16,6 @@ from particlebot.protocol import (
     decode_frame,
     encode_frame,
 )
-
 from tests.protocol.protocol_reference import bitwise_crc16, hex_bytes, load_vectors, reference_scan
 
 VECTORS = load_vectors()

@@ -150,22 +150,25 @@ size_t pb_parse_stream(const uint8_t *input, size_t input_len, uint8_t *out, siz
                        uint16_t counters[4]) {
   pb::FrameParser parser;
   size_t written = 0;
-  bool full = false;
-  for (size_t i = 0; i < input_len && !full; ++i) {
-    if (!parser.push(input[i])) continue;
-    const pb::Frame &f = parser.frame();
+  // Copies the frame the parser just accepted into out; false when it does not fit.
+  auto emit = [&](const pb::Frame &f) {
     const size_t need = 4u + f.length;
-    if (written + need > capacity) {
-      full = true;
-      break;
-    }
+    if (written + need > capacity) return false;
     out[written++] = f.type;
     out[written++] = f.sender;
     out[written++] = f.seq;
     out[written++] = f.length;
     memcpy(out + written, f.payload, f.length);
     written += f.length;
+    return true;
+  };
+  bool fits = true;
+  for (size_t i = 0; i < input_len && fits; ++i) {
+    if (parser.push(input[i])) fits = emit(parser.frame());
   }
+  // The end of the input is treated like the particle's idle timeout: a partial frame counts as
+  // truncated, and any frame hidden in its bytes is still found.
+  while (fits && parser.timeout()) fits = emit(parser.frame());
   if (counters != NULL) {
     const pb::ParserCounters &c = parser.counters();
     counters[0] = c.frames;

@@ -78,13 +78,15 @@ static struct {
   bool crashed;
   int servo_level;
   void (*core_reset)(avr_t *);
-  // UART1 receive queue: byte i is due at cycle rx_due[i] (absolute).
+  // UART1 receive queue: byte i starts on the wire at cycle rx_due[i] (absolute).
   uint8_t rx_byte[RX_QUEUE_SIZE];
   avr_cycle_count_t rx_due[RX_QUEUE_SIZE];
   unsigned rx_head, rx_count;
   uint64_t rx_line_free_scaled;  // when the wire is free again, in cycles * baud
   uint32_t baud;
   avr_irq_t *uart_in;
+  avr_uart_t *uart;  // UART1, whose byte timing fix_uart_timing() corrects
+  avr_cycle_count_t uart_byte_cycles;
   uint32_t adc_mv[ADC_INPUTS];
   uint32_t temperature_mv;
   driven_pin_t pins[DRIVEN_PINS_MAX];
@@ -179,6 +181,27 @@ static void after_reset(void) {
   for (int i = 0; i < sim.pin_count; ++i) apply_pin(&sim.pins[i]);
 }
 
+// simavr 1.6 times every UART byte as 11 bits (it counts a parity bit even when there is none),
+// so the firmware would send and take bytes 10 % slower than the 8N1 wire, and a receiver fed at
+// the wire rate would overflow simavr's 64-byte input FIFO after ~640 bytes. Its byte time is
+// recomputed from UBRR1 and U2X1 whenever the firmware sets the baud rate; put 10 bits back.
+// Runs after every instruction, so it only compares until simavr has changed the value.
+static void fix_uart_timing(void) {
+  avr_uart_t *u = sim.uart;
+  if (u->cycles_per_byte == sim.uart_byte_cycles) return;
+  const uint32_t ubrr =
+      avr_regbit_get(sim.avr, u->ubrrl) | (avr_regbit_get(sim.avr, u->ubrrh) << 8);
+  sim.uart_byte_cycles = 10u * (ubrr + 1) * (avr_regbit_get(sim.avr, u->u2x) ? 8u : 16u);
+  u->cycles_per_byte = sim.uart_byte_cycles;
+}
+
+static avr_uart_t *find_uart(char name) {
+  for (avr_io_t *io = sim.avr->io_port; io; io = io->next) {
+    if (strcmp(io->kind, "uart") == 0 && ((avr_uart_t *)io)->name == name) return (avr_uart_t *)io;
+  }
+  return NULL;
+}
+
 static avr_cycle_count_t wake(avr_t *avr, avr_cycle_count_t when, void *param) {
   (void)avr;
   (void)when;
@@ -196,6 +219,7 @@ static void run_until(avr_cycle_count_t target) {
     avr_cycle_timer_register(sim.avr, next - now(), wake, NULL);
     while (now() < next && !sim.reset_seen) {
       const int state = avr_run(sim.avr);
+      fix_uart_timing();
       if (state == cpu_Done || state == cpu_Crashed) {
         sim.crashed = true;
         emit("crashed %" PRIu64, (uint64_t)now());
@@ -231,10 +255,12 @@ static void queue_rx(const char *hex) {
       emit("error rx queue full");
       return;
     }
-    sim.rx_line_free_scaled += byte_scaled;
     const unsigned slot = (sim.rx_head + sim.rx_count) % RX_QUEUE_SIZE;
     sim.rx_byte[slot] = (uint8_t)value;
+    // Handed to simavr as its start bit begins: simavr's receiver then takes one byte time
+    // before it raises RXC, so the firmware gets the byte as its stop bit ends, as on the chip.
     sim.rx_due[slot] = (sim.rx_line_free_scaled + sim.baud - 1) / sim.baud;
+    sim.rx_line_free_scaled += byte_scaled;
     ++sim.rx_count;
   }
 }
@@ -396,6 +422,11 @@ int main(int argc, char **argv) {
   flags &= ~(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
   avr_ioctl(sim.avr, AVR_IOCTL_UART_SET_FLAGS('1'), &flags);
   sim.uart_in = avr_io_getirq(sim.avr, AVR_IOCTL_UART_GETIRQ('1'), UART_IRQ_INPUT);
+  sim.uart = find_uart('1');
+  if (!sim.uart) {
+    fprintf(stderr, "particle_sim: no UART1 in this simavr\n");
+    return 1;
+  }
   avr_irq_register_notify(avr_io_getirq(sim.avr, AVR_IOCTL_UART_GETIRQ('1'), UART_IRQ_OUTPUT),
                           on_uart_tx, NULL);
   avr_irq_register_notify(avr_io_getirq(sim.avr, AVR_IOCTL_IOPORT_GETIRQ('B'), IOPORT_IRQ_PIN5),

@@ -39,6 +39,7 @@ BACKENDS: dict[str, str] = {
     "serial": "particlebot.radio.serial:SerialRadio",
     "xbee": "particlebot.radio.xbee:XBeeRadio",
     "virtual": "particlebot.radio.virtual:VirtualRadio",
+    "emulated": "particlebot.radio.emulated:EmulatedRadio",
     "replay": "particlebot.logs.replay:ReplayRadio",
 }
 

@@ -231,6 +231,13 @@ class ParticleSim:
         self._uart_taken = len(self.uart)
         return data
 
+    def forget(self) -> None:
+        """Drops the UART bytes and servo pulses recorded so far, so that a long run (the console
+        driving a swarm for hours) keeps its memory bounded; take_uart() starts afresh."""
+        self.uart.clear()
+        self.servo_pulses.clear()
+        self._uart_taken = 0
+
     def eeprom(self) -> bytes:
         """The emulated chip's 1024 EEPROM bytes now."""
         self._send("eeprom")

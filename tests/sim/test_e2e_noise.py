@@ -1,0 +1,168 @@
+"""Garbage and damaged frames on the air: emulated particles survive, count it, and still obey."""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Iterator
+
+import pytest
+
+from particlebot.protocol import (
+    BASE_STATION_ID,
+    BROADCAST_ID,
+    Intensity,
+    Method,
+    Param,
+    Ping,
+    SetId,
+    SetParam,
+    Start,
+    State,
+    Status,
+    Stop,
+    StreamDecoder,
+    encode_frame,
+)
+from particlebot.sim import BASE, CPU_HZ, BaseStation, EmulatedSwarm, SwarmConfig
+from particlebot.sim.servo import missed_frames, period_errors_us
+
+pytestmark = pytest.mark.usefixtures("built_images")
+
+COUNT = 5
+ROUND_MS = 1000
+SPRAY_S = 3.0
+SPRAY_EVERY_S = 0.04
+# An edge of the pulse waits while another interrupt (millis, Serial1) finishes; the longest,
+# Serial1's transmit interrupt, takes ~120 cycles (15 us). tools/bench_sim.py saw 14.25 us.
+SERVO_JITTER_US = 20
+
+
+@pytest.fixture
+def swarm() -> Iterator[EmulatedSwarm]:
+    with EmulatedSwarm(SwarmConfig(count=COUNT, params={Param.ROUND_MS: ROUND_MS})) as emulated:
+        yield emulated
+
+
+def damaged(rng: random.Random) -> bytes:
+    """A real command or reading frame with something broken: bits flipped, cut short, a length
+    beyond max_payload, bytes inserted, or a false start before a bad CRC."""
+    message = rng.choice(
+        [
+            Start(
+                run_id=9,
+                method=Method.COUNTING,
+                cycle_steps=50,
+                wave_size=0,
+                update_interval_s=0,
+                phototaxis=0,
+            ),
+            Stop(),
+            SetParam(target=BROADCAST_ID, param=Param.CYCLE_STEPS, value=20),
+            SetId(target=1, new_id=77),
+            Ping(target=BROADCAST_ID),
+            Intensity(run_id=9, round=0, repeat=0, intensity=1000),
+        ]
+    )
+    sender = 3 if isinstance(message, Intensity) else BASE_STATION_ID
+    frame = bytearray(encode_frame(message, sender, rng.randrange(256)))
+    kind = rng.randrange(5)
+    if kind == 0:
+        for _ in range(rng.randint(1, 3)):
+            frame[rng.randrange(2, len(frame))] ^= 1 << rng.randrange(8)
+    elif kind == 1:
+        frame = frame[: rng.randrange(3, len(frame) - 1)]
+    elif kind == 2:
+        frame[2] = rng.randint(49, 255)
+    elif kind == 3:
+        at = rng.randrange(3, len(frame))
+        frame[at:at] = rng.randbytes(rng.randint(1, 4))
+    else:  # a false start: a sync marker and a little garbage before a damaged CRC
+        frame[-1] ^= 1 << rng.randrange(8)
+        frame[0:0] = frame[0:2] + rng.randbytes(rng.randint(0, 3))
+    return bytes(frame)
+
+
+def spray(swarm: EmulatedSwarm, rng: random.Random, seconds: float) -> bytes:
+    """Puts random bytes and damaged frames on the air for `seconds` (about half the capacity
+    of a 9600-baud link); returns everything sprayed."""
+    sprayed = bytearray()
+    end = swarm.time_s + seconds
+    while swarm.time_s < end:
+        chunk = rng.randbytes(rng.randint(5, 40)) if rng.random() < 0.5 else damaged(rng)
+        # None of it may be a valid frame by itself (a damaged START would start a run).
+        assert StreamDecoder().feed(chunk) == []
+        swarm.inject(chunk)
+        sprayed += chunk
+        swarm.run_for(SPRAY_EVERY_S)
+    return bytes(sprayed)
+
+
+def status_after_quiet_ping(base: BaseStation, index: int) -> tuple[Status, float]:
+    """A STATUS asked of one particle alone, and when the PING that asked had reached it."""
+    swarm = base.swarm
+    particle_id = swarm.ids[index]
+    asked = base.send(Ping(target=particle_id))
+    raw = base.sent[-1][1]
+    swarm.run_until_true(lambda: particle_id in base.statuses(asked), 0.5)
+    status = base.statuses(asked)[particle_id]
+    copy = next(
+        r
+        for r in swarm.medium.receptions
+        if r.receiver == index and r.packet.source == BASE and r.packet.data == raw
+    )
+    return status, copy.last / CPU_HZ
+
+
+def test_sprayed_garbage_is_counted_and_leaves_every_particle_working(swarm: EmulatedSwarm) -> None:
+    base = BaseStation(swarm)
+    swarm.run_for(0.3)
+    before = base.ping_all()
+    assert sorted(before) == swarm.ids
+
+    rng = random.Random(2024)
+    sprayed = spray(swarm, rng, SPRAY_S / 2)
+    during = base.ping_all(timeout_s=1.5)
+    assert sorted(during) == swarm.ids, "a particle stopped answering under noise"
+    sprayed += spray(swarm, rng, SPRAY_S / 2)
+    assert StreamDecoder().feed(sprayed) == []
+    swarm.run_for(0.3)  # quiet: every parser has timed out on whatever it held
+
+    for index, sim in enumerate(swarm.sims):
+        particle_id = swarm.ids[index]
+        assert sim.resets == [] and sim.crashed_cycle is None, f"particle {particle_id}"
+        # The servo never missed a 50 Hz frame: the main loop and its timer kept running.
+        assert missed_frames(sim.servo_pulses) == 0
+        assert max(abs(e) for e in period_errors_us(sim.servo_pulses)) <= SERVO_JITTER_US
+
+        status, pinged_s = status_after_quiet_ping(base, index)
+        # What its parser dropped is what was damaged in the bytes that reached it (the host's
+        # decoder, given the same bytes and the same 100 ms timeout, counts the same).
+        _, expected = swarm.received(index, until_s=pinged_s)
+        assert status.rx_frames == expected.frames
+        assert status.rx_bad_crc == expected.bad_crc
+        assert status.rx_bad_length == expected.bad_length + expected.truncated
+        assert status.rx_skipped_bytes == expected.skipped_bytes
+        assert status.rx_bad_crc + status.rx_bad_length > 20
+        assert status.rx_skipped_bytes > 1000
+        assert status.state == State.IDLE and status.run_id == before[particle_id].run_id
+        assert status.resets == before[particle_id].resets
+
+    # And each one still obeys START and STOP.
+    started = base.send(
+        Start(
+            run_id=5,
+            method=Method.COUNTING,
+            cycle_steps=75,
+            wave_size=0,
+            update_interval_s=0,
+            phototaxis=0,
+        )
+    )
+    swarm.run_until(started + ROUND_MS / 1000 + 0.1)
+    statuses = base.ping_all()
+    assert [statuses[i].s_n for i in swarm.ids] == list(range(1, COUNT + 1))
+    assert all(statuses[i].state in (State.WAITING, State.CYCLING) for i in swarm.ids)
+    base.send(Stop())
+    swarm.run_for(1.0)
+    statuses = base.ping_all()
+    assert all(statuses[i].state == State.IDLE for i in swarm.ids)

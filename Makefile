@@ -224,7 +224,7 @@ format: $(VENV)/.installed
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)
 
 # Firmware-logic tests run against the sanitized library; everything else against the release one.
-pytest: $(VENV)/.installed native native-asan firmware harness
+pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 	LD_PRELOAD=$(ASAN_RUNTIME) ASAN_OPTIONS=detect_leaks=0 \
 	  PARTICLEBOT_NATIVE_LIB=$(BUILD)/native-asan/libparticle.so \
 	  $(VENV)/bin/pytest -q tests/firmware
@@ -235,7 +235,7 @@ test: system-deps venv check-generated lint cpp-test pytest
 demo: system-deps venv native
 	$(VENV)/bin/particlebot demo
 
-bench: venv native firmware harness
+bench: venv native firmware firmware-faults harness
 	$(VPY) tools/bench.py
 
 clean:

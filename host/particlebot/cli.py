@@ -11,7 +11,9 @@ from particlebot.protocol import DEFINITION_HASH
 
 RADIO_HELP = (
     "radio URL: serial:///dev/ttyUSB0?baud=9600 (transparent XBee), xbee:///dev/ttyUSB0 "
-    "(API mode AP=1/2), virtual://10?speed=4 (simulated swarm); default $PARTICLEBOT_RADIO"
+    "(API mode AP=1/2), virtual://10?speed=4 (simulated swarm of the firmware logic), "
+    "emulated://5?loss=0.2 (the real firmware image in simavr; needs `make firmware harness`); "
+    "default $PARTICLEBOT_RADIO"
 )
 
 
@@ -50,6 +52,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--type", action="append", help="only this message type (STATUS, ...); repeatable"
     )
 
+    plot = commands.add_parser("plot", help="draw a log as a PNG: radius, state, intensity")
+    plot.add_argument("log", help="a .jsonl session log")
+    plot.add_argument("-o", "--output", help="PNG file (default: next to the log)")
+
     replay = commands.add_parser("replay", help="feed a log back through the console")
     replay.add_argument("log", help="a .jsonl session log")
     replay.add_argument("--speed", default="1", help="times real time, or max (default 1)")
@@ -74,6 +80,8 @@ def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
         from particlebot.commands.log import run
     elif command == "export":
         from particlebot.commands.export import run
+    elif command == "plot":
+        from particlebot.commands.plot import run
     elif command == "replay":
         from particlebot.commands.replay import run
     else:

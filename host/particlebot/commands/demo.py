@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from particlebot.commands._common import fail, run_headless, station
+from particlebot.commands.plot import write_plot
 from particlebot.console.app import ConsoleApp
 from particlebot.console.model import Campaign, ConsoleModel, state_name
 from particlebot.protocol import Method, State
@@ -173,8 +174,10 @@ def run(args: argparse.Namespace) -> int:
         )
     radio = VirtualRadio(swarm, url=f"virtual://{args.particles}?speed={speed:g}", speed=speed)
     log_dir = None if args.no_log else Path(args.log_dir)
+    log_path: Path | None = None
     try:
         with station(radio, log_dir) as base:
+            log_path = base.log_path
             script = DemoScript(base.model, swarm, locomote_s=args.run_s)
             if ui:
                 app = ConsoleApp(
@@ -200,6 +203,10 @@ def run(args: argparse.Namespace) -> int:
                     return 130
             print(summary(script))
             print(f"simulated {swarm.t:.1f} s at {swarm.achieved_speed:.1f}x real time")
-            return code
     except RadioError as exc:
         return fail(str(exc))
+    # Drawn once the log is closed, so it holds the whole session; a failed plot is reported but
+    # does not turn a good demo into a failed one.
+    if not ui and log_path is not None:
+        write_plot(log_path)
+    return code

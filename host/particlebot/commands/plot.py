@@ -1,0 +1,30 @@
+"""`particlebot plot`: a session log drawn as a PNG (radius, state and intensity per particle)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from particlebot.commands._common import fail
+from particlebot.plots import PlotInputError, plot_log
+
+
+def write_plot(log: Path, output: Path | None = None) -> int:
+    """Plots log to output (default: next to the log, .png); warnings go to stderr."""
+    target = output if output is not None else log.with_suffix(".png")
+    try:
+        result = plot_log(log, target)
+    except PlotInputError as exc:
+        return fail(str(exc))
+    for warning in result.warnings:
+        print(f"particlebot: warning: {warning}", file=sys.stderr)
+    print(
+        f"Plot: {result.output} ({result.particles} particles, "
+        f"{result.status_frames} STATUS frames)"
+    )
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    return write_plot(Path(args.log), Path(args.output) if args.output else None)

@@ -1,0 +1,434 @@
+"""Session plots: a log's STATUS frames as per-particle radius, state and intensity over time."""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+# Agg renders to files only: the plot must work on a headless lab PC or CI runner, and the
+# Figure/FigureCanvasAgg pair (not pyplot) keeps no global state between plots.
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+from matplotlib.transforms import blended_transform_factory
+
+from particlebot.protocol import Method, State
+
+Record = dict[str, Any]
+
+# Commands worth a marker: the ones that change what every particle does.
+MARKED_COMMANDS = ("START", "STOP")
+
+# The STATUS_PERIOD_MS default, used to hold a lone sample when a particle's own spacing is unknown.
+DEFAULT_STATUS_PERIOD_S = 2.0
+
+# A silence longer than this many STATUS periods is drawn as a gap, not as the last state held on:
+# the particle may have been switched off or out of range, and the plot must not pretend otherwise.
+GAP_PERIODS = 3.0
+
+STATE_COLOURS: dict[int, str] = {
+    State.IDLE: "#c8c8c8",
+    State.ESTIMATING: "#f2c14e",
+    State.WAITING: "#9ecae1",
+    State.CYCLING: "#2e8b57",
+    State.PAUSED: "#a1d99b",
+    State.STOPPING: "#e6550d",
+    State.DONE: "#756bb1",
+    State.IDENTIFYING: "#e377c2",
+}
+UNKNOWN_STATE_COLOUR = "#333333"
+
+
+class PlotInputError(ValueError):
+    """The log cannot be plotted (missing, empty, not a log, no STATUS frames)."""
+
+
+@dataclass
+class LogRecords:
+    records: list[Record]
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class ParticleSeries:
+    """One particle's STATUS samples, times in seconds since the session started."""
+
+    particle_id: int
+    times: list[float] = field(default_factory=list)
+    states: list[int] = field(default_factory=list)
+    s_n: list[int] = field(default_factory=list)
+    intensity: list[int] = field(default_factory=list)
+    radius_um: list[int] = field(default_factory=list)
+
+    @property
+    def radius_mm(self) -> list[float]:
+        return [value / 1000.0 for value in self.radius_um]
+
+    @property
+    def last_s_n(self) -> int | None:
+        """The latest S_n estimated (0 means not estimated yet, so it does not count)."""
+        return next((value for value in reversed(self.s_n) if value), None)
+
+    @property
+    def label(self) -> str:
+        s_n = self.last_s_n
+        return f"id {self.particle_id}" + ("" if s_n is None else f"  S_n {s_n}")
+
+    def sample_period(self) -> float:
+        """The typical spacing of this particle's STATUS frames (their median gap)."""
+        gaps = [b - a for a, b in zip(self.times, self.times[1:], strict=False) if b > a]
+        return statistics.median(gaps) if gaps else DEFAULT_STATUS_PERIOD_S
+
+
+@dataclass(frozen=True)
+class StateBand:
+    state: int
+    start: float
+    end: float
+
+
+@dataclass
+class CommandMark:
+    """A command sent to the swarm; resends of the same command (a campaign) add to sends."""
+
+    t: float
+    name: str
+    detail: str = ""
+    sends: int = 1
+    failed: bool = False
+
+    @property
+    def label(self) -> str:
+        text = self.name + (f" {self.detail}" if self.detail else "")
+        if self.sends > 1:
+            text += f" (sent {self.sends}x)"
+        return text + (" [send failed]" if self.failed else "")
+
+
+@dataclass
+class SessionSeries:
+    """Everything the plot draws, extracted from a log's records."""
+
+    particles: list[ParticleSeries]
+    commands: list[CommandMark]
+    duration: float
+    radio: str = ""
+    started: str = ""
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def status_frames(self) -> int:
+        return sum(len(p.times) for p in self.particles)
+
+    def particle(self, particle_id: int) -> ParticleSeries:
+        return next(p for p in self.particles if p.particle_id == particle_id)
+
+
+@dataclass(frozen=True)
+class PlotResult:
+    output: Path
+    particles: int
+    status_frames: int
+    warnings: list[str]
+
+
+def read_records(path: Path) -> LogRecords:
+    """A log's records. Unlike logs.jsonl.read_log this never raises on a bad line: a torn last
+    line (a killed session) or a damaged one is skipped with a warning, since a plot of the rest is
+    still worth having."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise PlotInputError(f"no log file {path}") from None
+    except OSError as exc:
+        raise PlotInputError(f"cannot read {path}: {exc.strerror or exc}") from None
+    lines = data.split(b"\n")
+    # A complete log ends with a newline, so only a killed writer leaves text after the last one.
+    last = len(lines)
+    result = LogRecords([])
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except ValueError:
+            record = None
+        if not isinstance(record, dict):
+            if number == last:
+                result.warnings.append(
+                    f"{path}:{number}: last line is truncated (session killed?); skipped"
+                )
+            else:
+                result.warnings.append(f"{path}:{number}: not a JSON object; skipped")
+            continue
+        result.records.append(record)
+    if not result.records:
+        raise PlotInputError(f"{path} holds no log records (empty, or not a particlebot log)")
+    return result
+
+
+def _time(record: Record) -> float | None:
+    value = record.get("t")
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _int_field(fields: Record, name: str) -> int:
+    value = fields[name]
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise TypeError(name)
+    return value
+
+
+def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionSeries:
+    """Per-particle STATUS series and the commands sent. Particles come ordered by their latest
+    S_n (nearest the light first), those never estimated last, ties by id."""
+    notes = list(warnings)
+    # The "end" record is stamped with the host's wall clock, which a sped-up virtual radio's
+    # clock outruns, so it is no guide to when the session's frames happened.
+    timed = [(t, r) for r in records if r.get("kind") != "end" and (t := _time(r)) is not None]
+    if not timed:
+        raise PlotInputError("the log holds no timed records")
+    t0 = min(t for t, _ in timed)
+    end = max(t for t, _ in timed) - t0
+    session = next((r for r in records if r.get("kind") == "session"), {})
+    series: dict[int, ParticleSeries] = {}
+    commands: list[CommandMark] = []
+    malformed = 0
+    for t, record in sorted(timed, key=lambda item: item[0]):
+        kind = record.get("kind")
+        if kind == "frame" and record.get("type") == "STATUS":
+            try:
+                sender = record["sender"]
+                fields = record["fields"]
+                sample = (
+                    _int_field(fields, "state"),
+                    _int_field(fields, "s_n"),
+                    _int_field(fields, "intensity"),
+                    _int_field(fields, "radius_um"),
+                )
+                if not isinstance(sender, int):
+                    raise TypeError("sender")
+            except (KeyError, TypeError):
+                malformed += 1
+                continue
+            particle = series.setdefault(sender, ParticleSeries(sender))
+            particle.times.append(t - t0)
+            particle.states.append(sample[0])
+            particle.s_n.append(sample[1])
+            particle.intensity.append(sample[2])
+            particle.radius_um.append(sample[3])
+        elif kind == "tx" and record.get("type") in MARKED_COMMANDS:
+            _add_command(commands, record, t - t0)
+    if malformed:
+        notes.append(f"{malformed} STATUS records without usable fields; skipped")
+    if not series:
+        raise PlotInputError("the log holds no STATUS frames: nothing to plot")
+    ordered = sorted(
+        series.values(),
+        key=lambda p: (p.last_s_n is None, p.last_s_n or 0, p.particle_id),
+    )
+    return SessionSeries(
+        particles=ordered,
+        commands=commands,
+        duration=end,
+        radio=str(session.get("radio", "")),
+        started=str(session.get("started", "")),
+        warnings=notes,
+    )
+
+
+def _add_command(commands: list[CommandMark], record: Record, t: float) -> None:
+    name = str(record["type"])
+    fields = record.get("fields") or {}
+    detail = ""
+    if name == "START":
+        method = fields.get("method", "?")
+        try:
+            method_name = Method(method).name
+        except (TypeError, ValueError):
+            method_name = str(method)
+        detail = f"run {fields.get('run_id', '?')} {method_name}"
+    failed = "error" in record
+    previous = commands[-1] if commands else None
+    # The console repeats a command until every particle confirms it; a repeat carries the same
+    # name and run, and drawing each one would bury the plot in lines.
+    if previous is not None and previous.name == name and previous.detail == detail:
+        previous.sends += 1
+        previous.failed = previous.failed and failed
+        return
+    commands.append(CommandMark(t, name, detail, failed=failed))
+
+
+def state_bands(particle: ParticleSeries, session_end: float) -> list[StateBand]:
+    """The states as sampled: each STATUS holds until the next one, the last for one STATUS period
+    (not past the session's end), and a silence of more than GAP_PERIODS periods is left empty."""
+    period = particle.sample_period()
+    bands: list[StateBand] = []
+    for index, (t, state) in enumerate(zip(particle.times, particle.states, strict=True)):
+        if index + 1 < len(particle.times):
+            following = particle.times[index + 1]
+            held = following if following - t <= GAP_PERIODS * period else t + period
+        else:
+            held = max(t, min(t + period, session_end))
+        if bands and bands[-1].state == state and bands[-1].end == t:
+            bands[-1] = StateBand(state, bands[-1].start, held)
+        else:
+            bands.append(StateBand(state, t, held))
+    return bands
+
+
+def _state_name(state: int) -> str:
+    try:
+        return State(state).name
+    except ValueError:
+        return f"state {state}"
+
+
+def _particle_colours(count: int) -> list[Any]:
+    # Ten particles or fewer get clearly distinct hues; bigger swarms a perceptual ramp in S_n
+    # order, where neighbours in the line are neighbours in colour.
+    from matplotlib import colormaps
+
+    if count <= 10:
+        return [colormaps["tab10"](index) for index in range(count)]
+    ramp = colormaps["viridis"]
+    return [ramp(0.9 * index / max(1, count - 1)) for index in range(count)]
+
+
+def render(session: SessionSeries, title: str) -> Figure:
+    """The session as a figure: radius, state timeline and intensity on one time axis."""
+    count = len(session.particles)
+    # Heights in inches grow with the swarm: the state panel needs a readable row per particle and
+    # the radius panel room for a legend line per particle beside it.
+    radius_height = max(3.0, 0.18 * count + 0.6)
+    state_height = max(1.6, 0.28 * count)
+    intensity_height = 2.2
+    figure = Figure(
+        figsize=(13, radius_height + state_height + intensity_height + 1.4),
+        dpi=100,
+        layout="constrained",
+    )
+    FigureCanvasAgg(figure)
+    radius_ax, state_ax, intensity_ax = figure.subplots(
+        3, 1, sharex=True, height_ratios=[radius_height, state_height, intensity_height]
+    )
+    colours = _particle_colours(count)
+    period = statistics.median(p.sample_period() for p in session.particles)
+    figure.suptitle(
+        f"{title}\nradius and intensity are sampled at STATUS times (about every {period:.1f} s "
+        "per particle): lines join samples, they do not trace the motion in between",
+        fontsize=11,
+    )
+
+    for colour, particle in zip(colours, session.particles, strict=True):
+        radius_ax.plot(
+            particle.times,
+            particle.radius_mm,
+            marker="o",
+            markersize=3,
+            linewidth=1.0,
+            color=colour,
+            label=particle.label,
+        )
+        intensity_ax.plot(
+            particle.times,
+            particle.intensity,
+            marker="o",
+            markersize=2.5,
+            linewidth=1.0,
+            color=colour,
+        )
+    radius_ax.set_ylabel("commanded radius (mm)")
+    radius_ax.set_title("commanded radius per particle, from STATUS radius_um", fontsize=10)
+    radius_ax.grid(True, alpha=0.3)
+    radius_ax.legend(
+        title="particle (by S_n)",
+        loc="upper left",
+        bbox_to_anchor=(1.005, 1.0),
+        fontsize=8,
+        title_fontsize=9,
+    )
+
+    seen_states: set[int] = set()
+    for row, particle in enumerate(session.particles):
+        for band in state_bands(particle, session.duration):
+            seen_states.add(band.state)
+            state_ax.broken_barh(
+                [(band.start, band.end - band.start)],
+                (row - 0.4, 0.8),
+                facecolors=STATE_COLOURS.get(band.state, UNKNOWN_STATE_COLOUR),
+                edgecolor="none",
+            )
+    state_ax.set_yticks(range(count), [p.label for p in session.particles], fontsize=8)
+    state_ax.set_ylim(count - 0.5, -0.5)
+    state_ax.set_title("state per particle (as reported in STATUS)", fontsize=10)
+    state_ax.grid(True, axis="x", alpha=0.3)
+    state_ax.legend(
+        handles=[
+            Patch(color=STATE_COLOURS.get(state, UNKNOWN_STATE_COLOUR), label=_state_name(state))
+            for state in sorted(seen_states)
+        ],
+        title="state",
+        loc="upper left",
+        bbox_to_anchor=(1.005, 1.0),
+        fontsize=8,
+        title_fontsize=9,
+    )
+
+    intensity_ax.set_ylabel("intensity\n(ADC counts, 0-1023)")
+    intensity_ax.set_title("light intensity per particle (mean of healthy sensors)", fontsize=10)
+    intensity_ax.grid(True, alpha=0.3)
+    intensity_ax.set_xlabel("time since the session started (s)")
+    intensity_ax.set_xlim(0.0, max(session.duration, 1.0))
+
+    label_at = blended_transform_factory(radius_ax.transData, radius_ax.transAxes)
+    span = max(session.duration, 1.0)
+    previous_t: float | None = None
+    height = 0.98
+    for command in session.commands:
+        colour = "#b2182b" if command.name == "STOP" else "#2166ac"
+        for ax in (radius_ax, state_ax, intensity_ax):
+            ax.axvline(command.t, color=colour, linestyle="--", linewidth=1.2)
+        # Labels of commands close in time are stacked so they stay readable, and a label in the
+        # right part of the plot sits left of its line so the axes do not clip it.
+        close = previous_t is not None and command.t - previous_t < 0.3 * span
+        height = height - 0.08 if close and height > 0.6 else 0.98
+        previous_t = command.t
+        right_side = command.t > 0.6 * span
+        radius_ax.text(
+            command.t,
+            height,
+            f" {command.label} @ {command.t:.1f} s ",
+            transform=label_at,
+            color=colour,
+            fontsize=8,
+            fontweight="bold",
+            va="top",
+            ha="right" if right_side else "left",
+            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0},
+        )
+    return figure
+
+
+def plot_log(log: Path, output: Path) -> PlotResult:
+    """Reads log and writes its plot as a PNG to output (PlotInputError if it cannot)."""
+    loaded = read_records(log)
+    session = extract(loaded.records, loaded.warnings)
+    title = f"particlebot session {log.name}: {len(session.particles)} particles"
+    if session.radio:
+        title += f" on {session.radio}"
+    if session.started:
+        title += f", started {session.started}"
+    figure = render(session, title)
+    try:
+        figure.savefig(output, format="png")
+    except OSError as exc:
+        raise PlotInputError(f"cannot write {output}: {exc.strerror or exc}") from None
+    return PlotResult(output, len(session.particles), session.status_frames, session.warnings)

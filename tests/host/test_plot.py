@@ -1,0 +1,261 @@
+"""`particlebot plot`: a log drawn as a PNG, its series extracted right, bad logs refused."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from matplotlib.image import imread
+
+from particlebot.cli import main
+from particlebot.logs.jsonl import JsonlWriter
+from particlebot.plots import (
+    ParticleSeries,
+    PlotInputError,
+    StateBand,
+    extract,
+    read_records,
+    state_bands,
+)
+from particlebot.protocol import Method, Start, State, Stop, decode_frame, encode_frame
+from particlebot.session import Note, ReceivedFrame, SentFrame
+from tests.host.fakes import status_message
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+# (seconds after the session record, state, s_n, radius_um, intensity) per particle.
+SCRIPT: dict[int, list[tuple[float, State, int, int, int]]] = {
+    2: [
+        (0.5, State.IDLE, 0, 77500, 0),
+        (2.5, State.IDLE, 0, 77500, 950),
+        (4.5, State.ESTIMATING, 0, 77500, 951),
+        (6.5, State.CYCLING, 1, 101250, 952),
+        (8.5, State.CYCLING, 1, 120000, 953),
+        (10.5, State.IDLE, 1, 77500, 954),
+    ],
+    1: [
+        (0.7, State.IDLE, 0, 77500, 800),
+        (2.7, State.ESTIMATING, 0, 77500, 801),
+        (4.7, State.WAITING, 2, 77500, 802),
+        (6.7, State.PAUSED, 2, 77500, 803),
+        (8.7, State.STOPPING, 2, 90000, 804),
+    ],
+    # Never estimated: it must come last whatever its id.
+    0: [(1.1, State.IDLE, 0, 77500, 500), (3.1, State.IDLE, 0, 77500, 501)],
+}
+START_AT = (3.0, 3.25)  # the console's campaign sends START twice
+STOP_AT = 9.0
+NOTE_AT = 11.5  # the last thing the session logged: the end of the time axis
+
+
+@dataclass
+class Written:
+    path: Path
+    started: float
+
+
+def write_session(path: Path) -> Written:
+    """A log written by the project's own JsonlWriter from real encoded frames."""
+    writer = JsonlWriter(path, radio="virtual://3")
+    started = json.loads(path.read_text().splitlines()[0])["t"]
+    events: list[tuple[float, object]] = []
+    for sender, samples in SCRIPT.items():
+        for seq, (at, state, s_n, radius, intensity) in enumerate(samples):
+            message = status_message(
+                state=int(state), s_n=s_n, radius_um=radius, intensity=intensity, run_id=7
+            )
+            frame = decode_frame(encode_frame(message, sender, seq))
+            events.append((at, ReceivedFrame(started + at, f"virtual-{sender:02d}", frame)))
+    start = Start(
+        run_id=7,
+        method=int(Method.COUNTING),
+        cycle_steps=100,
+        wave_size=0,
+        update_interval_s=0,
+        phototaxis=0,
+    )
+    for seq, at in enumerate(START_AT):
+        events.append((at, SentFrame(started + at, decode_frame(encode_frame(start, 0, seq)))))
+    stop = decode_frame(encode_frame(Stop(), 0, 9))
+    events.append((STOP_AT, SentFrame(started + STOP_AT, stop)))
+    events.append((NOTE_AT, Note(started + NOTE_AT, "done")))
+    for _, event in sorted(events, key=lambda item: item[0]):
+        if isinstance(event, ReceivedFrame):
+            writer.on_frame(event)
+        elif isinstance(event, SentFrame):
+            writer.on_sent(event)
+        elif isinstance(event, Note):
+            writer.on_note(event)
+    writer.on_close()
+    return Written(path, started)
+
+
+@pytest.fixture
+def session_log(tmp_path: Path) -> Written:
+    return write_session(tmp_path / "session.jsonl")
+
+
+def extracted(path: Path) -> list[ParticleSeries]:
+    loaded = read_records(path)
+    return extract(loaded.records, loaded.warnings).particles
+
+
+def test_the_plot_command_writes_a_png_next_to_the_log(
+    session_log: Written, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plot", str(session_log.path)]) == 0
+    png = session_log.path.with_suffix(".png")
+    assert f"Plot: {png} (3 particles, 13 STATUS frames)" in capsys.readouterr().out
+    assert png.read_bytes().startswith(PNG_MAGIC)
+    pixels = imread(png)
+    # A real drawing, not a blank canvas: many distinct colours over a sizeable image.
+    assert pixels.shape[0] > 400 and pixels.shape[1] > 600
+    assert len({tuple(p) for p in pixels.reshape(-1, pixels.shape[2])[::97]}) > 20
+
+
+def test_the_output_option_chooses_where_the_png_goes(session_log: Written, tmp_path: Path) -> None:
+    output = tmp_path / "elsewhere.png"
+    assert main(["plot", str(session_log.path), "-o", str(output)]) == 0
+    assert output.read_bytes().startswith(PNG_MAGIC)
+    assert not session_log.path.with_suffix(".png").exists()
+
+
+def test_the_radius_series_of_a_particle_is_its_status_radius_in_order(
+    session_log: Written,
+) -> None:
+    particle = next(p for p in extracted(session_log.path) if p.particle_id == 2)
+    assert particle.radius_um == [sample[3] for sample in SCRIPT[2]]
+    assert particle.radius_mm == [sample[3] / 1000 for sample in SCRIPT[2]]
+    assert particle.intensity == [sample[4] for sample in SCRIPT[2]]
+    # Times count from the session record, the first line of the log.
+    assert particle.times == pytest.approx([sample[0] for sample in SCRIPT[2]], abs=1e-5)
+
+
+def test_particles_are_ordered_by_their_latest_s_n_and_the_unestimated_come_last(
+    session_log: Written,
+) -> None:
+    particles = extracted(session_log.path)
+    assert [p.particle_id for p in particles] == [2, 1, 0]
+    assert [p.label for p in particles] == ["id 2  S_n 1", "id 1  S_n 2", "id 0"]
+
+
+def test_state_bands_begin_and_end_at_the_status_frames_that_report_them(
+    session_log: Written,
+) -> None:
+    loaded = read_records(session_log.path)
+    session = extract(loaded.records)
+    assert session.duration == pytest.approx(NOTE_AT, abs=1e-5)
+    bands = state_bands(session.particle(2), session.duration)
+    assert [band.state for band in bands] == [
+        State.IDLE,
+        State.ESTIMATING,
+        State.CYCLING,
+        State.IDLE,
+    ]
+    edges = [edge for band in bands for edge in (band.start, band.end)]
+    # The last sample holds for one STATUS period (2 s) but not past the session's end.
+    assert edges == pytest.approx([0.5, 4.5, 4.5, 6.5, 6.5, 10.5, 10.5, NOTE_AT], abs=1e-5)
+
+
+def test_a_silence_longer_than_three_status_periods_is_left_out_of_the_state_bands() -> None:
+    particle = ParticleSeries(
+        7,
+        times=[1.0, 3.0, 5.0, 7.0, 15.0],
+        states=[int(State.WAITING)] * 4 + [int(State.DONE)],
+        s_n=[3] * 5,
+        intensity=[600] * 5,
+        radius_um=[77500] * 5,
+    )
+    assert state_bands(particle, session_end=30.0) == [
+        StateBand(State.WAITING, 1.0, 9.0),
+        StateBand(State.DONE, 15.0, 17.0),
+    ]
+
+
+def test_commands_sent_are_found_and_resends_of_one_command_are_one_mark(
+    session_log: Written,
+) -> None:
+    loaded = read_records(session_log.path)
+    commands = extract(loaded.records).commands
+    assert [(c.name, c.sends) for c in commands] == [("START", 2), ("STOP", 1)]
+    assert [c.t for c in commands] == pytest.approx([START_AT[0], STOP_AT], abs=1e-5)
+    assert commands[0].label == "START run 7 COUNTING (sent 2x)"
+
+
+def test_a_missing_log_is_a_clear_error_with_exit_code_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plot", str(tmp_path / "absent.jsonl")]) == 2
+    err = capsys.readouterr().err
+    assert "no log file" in err and "Traceback" not in err
+    assert not (tmp_path / "absent.png").exists()
+
+
+def test_an_empty_log_is_a_clear_error_with_exit_code_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "empty.jsonl"
+    log.write_bytes(b"")
+    assert main(["plot", str(log)]) == 2
+    assert "holds no log records" in capsys.readouterr().err
+
+
+def test_a_log_without_status_frames_is_a_clear_error_with_exit_code_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "quiet.jsonl"
+    writer = JsonlWriter(log, radio="virtual://0")
+    writer.on_note(Note(1.0, "nobody answered"))
+    writer.on_close()
+    assert main(["plot", str(log)]) == 2
+    assert "no STATUS frames" in capsys.readouterr().err
+    assert not log.with_suffix(".png").exists()
+
+
+def test_a_truncated_last_line_is_skipped_with_a_warning_and_the_rest_is_plotted(
+    session_log: Written, capsys: pytest.CaptureFixture[str]
+) -> None:
+    whole = extracted(session_log.path)
+    with session_log.path.open("ab") as log:
+        log.write(b'{"t":12.0,"kind":"frame","sender":2,"type":"STAT')
+    assert main(["plot", str(session_log.path)]) == 0
+    captured = capsys.readouterr()
+    assert "last line is truncated" in captured.err
+    assert session_log.path.with_suffix(".png").read_bytes().startswith(PNG_MAGIC)
+    assert extracted(session_log.path) == whole
+
+
+def test_a_damaged_line_inside_the_log_is_skipped_with_a_warning(session_log: Written) -> None:
+    lines = session_log.path.read_bytes().split(b"\n")
+    lines[3] = lines[3][:20]
+    session_log.path.write_bytes(b"\n".join(lines))
+    loaded = read_records(session_log.path)
+    assert loaded.warnings == [f"{session_log.path}:4: not a JSON object; skipped"]
+    assert extract(loaded.records).status_frames == 12
+
+
+def test_an_unwritable_output_is_a_clear_error_with_exit_code_2(
+    session_log: Written, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    output = tmp_path / "no-such-dir" / "plot.png"
+    assert main(["plot", str(session_log.path), "-o", str(output)]) == 2
+    assert "cannot write" in capsys.readouterr().err
+
+
+def test_read_records_refuses_a_directory_without_a_traceback(tmp_path: Path) -> None:
+    with pytest.raises(PlotInputError, match="cannot read"):
+        read_records(tmp_path)
+
+
+def test_the_headless_demo_writes_its_plot_next_to_its_log(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(["demo", "--particles", "3", "--run-s", "2", "--log-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    (log,) = tmp_path.glob("*.jsonl")
+    png = log.with_suffix(".png")
+    assert f"Plot: {png} (3 particles," in out
+    assert png.read_bytes().startswith(PNG_MAGIC)

@@ -88,3 +88,15 @@ def test_wrong_radios_and_files_get_a_message_saying_what_to_do(
     monkeypatch.delenv("PARTICLEBOT_RADIO", raising=False)
     assert main(argv) == 2
     assert complaint in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["console", "log"])
+def test_the_radio_help_names_every_kind_of_radio(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    # argparse wraps the help to the terminal's width; compare it as one line.
+    text = " ".join(capsys.readouterr().out.split())
+    for example in ("serial://", "xbee://", "virtual://10", "emulated://5"):
+        assert example in text

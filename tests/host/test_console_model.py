@@ -5,10 +5,11 @@ from __future__ import annotations
 import pytest
 
 from particlebot.console.commands import CommandError, execute, help_text
-from particlebot.console.model import ConsoleModel
+from particlebot.console.model import Campaign, ConsoleModel
 from particlebot.protocol import (
     BROADCAST_ID,
     DEFINITION_HASH,
+    UNASSIGNED_ID,
     Message,
     Method,
     Param,
@@ -28,12 +29,17 @@ from tests.host.fakes import ManualClock, status_frame
 
 
 class Sink:
-    def __init__(self) -> None:
+    """Keeps what the model sends, with the clock's time of each."""
+
+    def __init__(self, clock: ManualClock) -> None:
+        self.clock = clock
         self.messages: list[Message] = []
+        self.times: list[float] = []
         self.notes: list[str] = []
 
     def send(self, message: Message) -> None:
         self.messages.append(message)
+        self.times.append(self.clock())
 
     def note(self, text: str) -> None:
         self.notes.append(text)
@@ -41,10 +47,28 @@ class Sink:
     def types(self) -> list[str]:
         return [type(m).__name__ for m in self.messages]
 
+    def since(self, count: int) -> list[str]:
+        """What was sent after the first count messages: "Stop", "Start", "Ping 3"."""
+        return [_describe(m) for m in self.messages[count:]]
+
+    def offsets(self, kind: type[Message], origin: float) -> list[float]:
+        """When each message of a kind went out, in seconds after origin (to the millisecond)."""
+        return [
+            round(at - origin, 3)
+            for at, m in zip(self.times, self.messages, strict=True)
+            if isinstance(m, kind)
+        ]
+
+
+def _describe(message: Message) -> str:
+    if isinstance(message, Ping):
+        return f"Ping {message.target}"
+    return type(message).__name__
+
 
 @pytest.fixture
-def sink() -> Sink:
-    return Sink()
+def sink(clock: ManualClock) -> Sink:
+    return Sink(clock)
 
 
 @pytest.fixture
@@ -100,23 +124,68 @@ def test_frames_from_a_base_station_are_not_particles(
     assert model.rows() == []
 
 
-def test_stop_is_repeated_until_every_particle_reports_it_has_stopped(
+def run(model: ConsoleModel, clock: ManualClock, seconds: float, every: float = 0.05) -> None:
+    """Polls the model every `every` seconds for `seconds`, as the console's timer does."""
+    for _ in range(round(seconds / every)):
+        clock.advance(every)
+        model.poll()
+
+
+def hear_all(model: ConsoleModel, clock: ManualClock, ids: range, state: State) -> None:
+    for particle in ids:
+        hear(model, clock, status_frame(particle, state=int(state)))
+
+
+def stop_running(model: ConsoleModel, clock: ManualClock, ids: range) -> Campaign:
+    """Particles ids report CYCLING; then STOP, and polls until its burst has gone out."""
+    hear_all(model, clock, ids, State.CYCLING)
+    campaign = model.stop()
+    run(model, clock, 0.35)
+    return campaign
+
+
+def test_stop_goes_out_four_times_in_three_tenths_of_a_second_then_pings_each_particle(
     model: ConsoleModel, clock: ManualClock, sink: Sink
 ) -> None:
-    for particle in (1, 2, 3):
-        hear(model, clock, status_frame(particle, state=int(State.CYCLING)))
-    campaign = model.stop()
-    assert sink.types() == ["Stop", "Ping"]
-    clock.advance(1.0)
+    hear_all(model, clock, range(1, 4), State.CYCLING)
+    origin = clock()
+    model.stop()
+    assert sink.since(0) == ["Stop"]  # at once, without waiting for a poll
+    run(model, clock, 0.4)
+    assert sink.offsets(Stop, origin) == [0.0, 0.1, 0.2, 0.3]
+    # The PINGs follow the last copy, so each STATUS they ask for shows the STOP obeyed.
+    assert sink.since(4) == ["Ping 1", "Ping 2", "Ping 3"]
+    assert sink.offsets(Ping, origin) == [0.3] * 3
+
+
+def test_after_a_late_poll_the_rest_of_the_burst_goes_out_one_copy_a_poll(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    hear_all(model, clock, range(1, 2), State.CYCLING)
+    origin = clock()
+    model.stop()
+    clock.advance(0.25)  # the copies due at 0.1 and 0.2 were missed: one goes now, not two
     model.poll()
-    assert sink.types() == ["Stop", "Ping"] * 2  # nobody answered: again
-    hear(model, clock, status_frame(1, state=int(State.IDLE)))
-    hear(model, clock, status_frame(2, state=int(State.IDLE)))
-    model.poll()
+    run(model, clock, 0.2)
+    # None is dropped and none doubled: every copy stands a fresh chance on the air.
+    assert sink.offsets(Stop, origin) == [0.0, 0.25, 0.3, 0.35]
+
+
+def test_stop_is_repeated_every_half_second_until_every_particle_reports_it_has_stopped(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    origin = clock()
+    campaign = stop_running(model, clock, range(1, 4))
+    hear_all(model, clock, range(1, 3), State.IDLE)
+    sent = len(sink.messages)
+    run(model, clock, 0.5)
+    # Particle 3 has not answered: it may have missed every copy. Those that have stopped
+    # are not asked again.
+    assert sink.since(sent) == ["Stop", "Ping 3"]
+    assert sink.offsets(Stop, origin)[-1] == 0.8
     assert not campaign.done
-    clock.advance(1.0)
-    model.poll()
-    assert sink.types()[-2:] == ["Stop", "Ping"]  # particle 3 has not obeyed yet
+    run(model, clock, 0.5)
+    assert sink.offsets(Stop, origin)[-1] == 1.3
     hear(model, clock, status_frame(3, state=int(State.DONE)))
     assert campaign.done and campaign.success
     assert campaign.confirmed == {"1", "2", "3"}
@@ -129,65 +198,162 @@ def test_a_status_from_before_the_stop_does_not_confirm_it(
     hear(model, clock, status_frame(1, state=int(State.IDLE)))
     clock.advance(0.5)
     campaign = model.stop()
-    model.poll()
+    run(model, clock, 1.0)
     assert not campaign.done
 
 
 def test_stop_is_not_repeated_once_every_particle_obeys_it_only_pinged(
     model: ConsoleModel, clock: ManualClock, sink: Sink
 ) -> None:
-    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
-    hear(model, clock, status_frame(2, state=int(State.PAUSED)))
-    campaign = model.stop()
-    hear(model, clock, status_frame(1, state=int(State.STOPPING)))
-    hear(model, clock, status_frame(2, state=int(State.STOPPING)))
-    clock.advance(1.0)
-    model.poll()
+    campaign = stop_running(model, clock, range(1, 3))
+    hear_all(model, clock, range(1, 3), State.STOPPING)
+    sent = len(sink.messages)
+    run(model, clock, 0.5)
     # A repeated STOP would restart their contraction; a PING just asks how it went.
-    assert sink.types() == ["Stop", "Ping", "Ping"]
-    hear(model, clock, status_frame(1, state=int(State.IDLE)))
-    hear(model, clock, status_frame(2, state=int(State.IDLE)))
+    assert sink.since(sent) == ["Ping 1", "Ping 2"]
+    hear_all(model, clock, range(1, 3), State.IDLE)
     assert campaign.success
+
+
+def stop_answered_at_once(model: ConsoleModel, clock: ManualClock) -> Campaign:
+    """Particle 1 reports CYCLING; STOP; 0.05 s later (before the burst is out) it is IDLE."""
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    campaign = model.stop()
+    clock.advance(0.05)
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    return campaign
+
+
+def test_the_whole_burst_goes_out_even_when_every_known_particle_has_stopped(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    campaign = stop_answered_at_once(model, clock)
+    # Particles the console has not heard yet may be out there; only the burst can reach them.
+    assert not campaign.done
+    run(model, clock, 0.4)
+    assert sink.types().count("Stop") == 4
+    assert campaign.done and campaign.success
+
+
+def test_a_particle_whose_latest_status_is_no_longer_stopped_is_waited_for_again(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    campaign = stop_answered_at_once(model, clock)
+    assert campaign.confirmed == {"1"}
+    run(model, clock, 0.2)
+    # A later copy of the burst found it stopped, and for a moment it is STOPPING again.
+    hear(model, clock, status_frame(1, state=int(State.STOPPING)))
+    run(model, clock, 0.1)
+    assert not campaign.done and campaign.pending == {"1"}
+    assert sink.since(4) == ["Ping 1"]
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    assert campaign.done and campaign.success
 
 
 def test_stop_names_the_particles_that_never_confirmed(
     model: ConsoleModel, clock: ManualClock, sink: Sink
 ) -> None:
-    for particle in (5, 6, 7):
-        hear(model, clock, status_frame(particle, state=int(State.CYCLING)))
+    hear_all(model, clock, range(5, 8), State.CYCLING)
+    origin = clock()
     campaign = model.stop()
+    clock.advance(0.05)
     hear(model, clock, status_frame(6, state=int(State.IDLE)))
-    for _ in range(12):
-        clock.advance(1.0)
-        model.poll()
+    run(model, clock, model.stop_timeout + 0.1)
     assert campaign.done and not campaign.success
     assert "particle(s) 5, 7" in campaign.outcome
-    assert sink.types().count("Stop") == model.stop_timeout  # one per second until the timeout
+    # After the burst, every half second until the timeout.
+    repeats = sink.offsets(Stop, origin)[4:]
+    assert repeats == [round(0.8 + 0.5 * k, 3) for k in range(19)]
 
 
-def test_stop_with_no_particles_known_says_so(model: ConsoleModel, clock: ManualClock) -> None:
+def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
     campaign = model.stop()
-    clock.advance(model.stop_timeout)
-    model.poll()
+    run(model, clock, 0.4)
+    assert sink.types() == ["Stop"] * 4
     assert campaign.done and "no particles known" in campaign.outcome
 
 
-def test_start_takes_a_new_run_id_and_is_resent_until_each_reports_it(
+def test_pings_go_to_four_particles_a_round_those_asked_least_first(
     model: ConsoleModel, clock: ManualClock, sink: Sink
 ) -> None:
-    hear(model, clock, status_frame(1, run_id=7))
-    hear(model, clock, status_frame(2, run_id=3))
+    stop_running(model, clock, range(1, 7))
+    assert sink.since(4) == ["Ping 1", "Ping 2", "Ping 3", "Ping 4"]
+    sent = len(sink.messages)
+    run(model, clock, 0.5)
+    assert sink.since(sent) == ["Stop", "Ping 5", "Ping 6", "Ping 1", "Ping 2"]
+
+
+def test_one_ping_asks_every_particle_without_an_id(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    hear(model, clock, status_frame(3, state=int(State.CYCLING)))
+    for source in ("0013A20000000001", "0013A20000000002"):
+        hear(model, clock, status_frame(254, state=int(State.CYCLING)), source=source)
+    model.stop()
+    run(model, clock, 0.35)
+    assert sink.since(4) == ["Ping 3", f"Ping {UNASSIGNED_ID}"]
+
+
+def test_a_stop_burst_must_start_at_once_and_be_in_order(clock: ManualClock) -> None:
+    for burst in [(), (0.1, 0.2), (0.0, 0.2, 0.1)]:
+        with pytest.raises(ValueError, match="stop_burst"):
+            ConsoleModel(None, clock, stop_burst=burst)
+
+
+def start_with_one_answer(
+    model: ConsoleModel, clock: ManualClock, runs: dict[int, int]
+) -> Campaign:
+    """Particles (id: run) report those runs; START (method B, 75 steps); 0.1 s later the first
+    of them reports the new run."""
+    for particle, run_id in runs.items():
+        hear(model, clock, status_frame(particle, run_id=run_id))
     campaign = model.start(Method.LINEAR, cycle_steps=75)
+    clock.advance(0.1)
+    first = next(iter(runs))
+    hear(model, clock, status_frame(first, run_id=model.run_id, state=int(State.ESTIMATING)))
+    return campaign
+
+
+def test_start_takes_a_new_run_id_and_pings_each_particle_until_it_reports_it(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    origin = clock()
+    campaign = start_with_one_answer(model, clock, {1: 7, 2: 3})
     start = sink.messages[0]
     assert isinstance(start, Start)
     assert (start.run_id, start.method, start.cycle_steps) == (8, Method.LINEAR, 75)
-    hear(model, clock, status_frame(1, run_id=8, state=int(State.ESTIMATING)))
-    clock.advance(model.start_interval)
-    model.poll()
-    assert [type(m).__name__ for m in sink.messages] == ["Start", "Start"]
-    assert sink.messages[1] == start  # the same run_id, which particles in the run ignore
+    # Each particle is asked at once, behind the START, rather than left to its next STATUS.
+    assert sink.since(1) == ["Ping 1", "Ping 2"]
+    run(model, clock, 0.45)
+    assert sink.since(3) == ["Ping 2"]  # no answer yet: asked again, START not resent
+    assert sink.offsets(Ping, origin)[-1] == 0.5
     hear(model, clock, status_frame(2, run_id=8, state=int(State.ESTIMATING)))
     assert campaign.success
+    assert "confirmed by all 2" in campaign.outcome
+
+
+def test_start_is_resent_with_the_same_run_id_when_a_particle_reports_another_run(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    campaign = start_with_one_answer(model, clock, {1: 7, 2: 7})
+    hear(model, clock, status_frame(2, run_id=7))  # its answer shows it missed START
+    run(model, clock, 0.45)
+    assert sink.since(3) == ["Start", "Ping 2"]
+    assert sink.messages[3] == sink.messages[0]  # the same run_id: particle 1 ignores it
+    hear(model, clock, status_frame(2, run_id=8, state=int(State.ESTIMATING)))
+    assert campaign.success
+
+
+def test_start_names_the_particles_that_never_confirmed(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    campaign = start_with_one_answer(model, clock, {1: 2, 4: 2})
+    run(model, clock, model.start_timeout + 0.1)
+    assert campaign.done and not campaign.success
+    assert "START not confirmed within 8 s by particle(s) 4 (1 confirmed)" in campaign.outcome
+    assert sink.types().count("Start") == 1  # particle 4 never answered: nothing says it missed
 
 
 def test_stop_cancels_a_start_still_being_resent(
@@ -197,8 +363,9 @@ def test_stop_cancels_a_start_still_being_resent(
     start = model.start(Method.COUNTING)
     model.stop()
     assert start.done and not start.success
-    clock.advance(model.start_interval)
-    model.poll()
+    clock.advance(0.1)
+    hear(model, clock, status_frame(1, run_id=0))  # "another run": would resend START
+    run(model, clock, 2.0)
     assert "Start" not in sink.types()[1:]
 
 
@@ -224,6 +391,14 @@ def test_commands_become_the_right_messages(model: ConsoleModel, sink: Sink) -> 
     assert set_id == SetId(target=254, new_id=12)
     assert identify.target == BROADCAST_ID  # type: ignore[attr-defined]
     assert ping == Ping(target=4)
+
+
+def test_the_stop_and_start_commands_say_how_they_are_repeated(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    assert "4 copies in 0.3 s" in execute(model, "stop")
+    assert "1 known particle(s)" in execute(model, "start D")
 
 
 @pytest.mark.parametrize(

@@ -30,6 +30,11 @@ COLUMNS = [
     ("flags", "FLAGS"),
 ]
 
+# How often the model's campaigns are advanced: a STOP copy goes out at most this late, and the
+# last of the burst must leave within ~0.35 s of the command for every servo to be contracted
+# within 1 s.
+POLL_S = 0.05
+
 WELCOME = (
     "Keys: s start  x STOP  p set parameter  i identify  d set id  : command line  ? help  "
     "q quit.  Type 'help' in the command line for every command."
@@ -74,8 +79,9 @@ def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Te
 
 
 class ConsoleApp(App[int]):
-    """Shows a ConsoleModel and sends its commands. `on_tick` (if given) runs ten times a second
-    and ends the app when it returns an exit code (the demo's script uses this)."""
+    """Shows a ConsoleModel and sends its commands. `on_tick` (if given) runs with every poll
+    of the model (POLL_S) and ends the app when it returns an exit code (the demo's script uses
+    this)."""
 
     TITLE = "particlebot console"
     CSS = """
@@ -135,7 +141,7 @@ class ConsoleApp(App[int]):
         self.query_one("#messages", RichLog).write(Text(WELCOME, style="bold"))
         self.refresh_view()
         self.set_interval(self.refresh_s, self.refresh_view)
-        self.set_interval(0.1, self._tick)
+        self.set_interval(POLL_S, self._tick)
 
     # ---- periodic --------------------------------------------------------------------------
 

@@ -35,7 +35,11 @@ COMMANDS: dict[str, CommandHelp] = {
         "cycle = servo steps of 20 ms per cycle, wave = N of eq. 3, update = seconds between "
         "re-estimations (0 keeps each particle's stored value; wave 0 = automatic)",
     ),
-    "stop": CommandHelp("stop", "broadcast STOP until every known particle reports it stopped"),
+    "stop": CommandHelp(
+        "stop",
+        "broadcast STOP several times at once, then again until every known particle reports "
+        "it stopped",
+    ),
     "set": CommandHelp(
         "set PARAM VALUE [ID|all]", "set a parameter (stored in EEPROM; refused while running)"
     ),
@@ -135,13 +139,16 @@ def _start(model: ConsoleModel, args: list[str]) -> str:
     )
     return (
         f"START run {model.run_id} method {method.name} sent to {len(campaign.pending)} "
-        "known particle(s); resending until each confirms"
+        "known particle(s); asking each (PING) until it confirms, resending to any that missed it"
     )
 
 
 def _stop(model: ConsoleModel, args: list[str]) -> str:
     campaign = model.stop()
-    return f"STOP sent; repeating until all {len(campaign.pending)} known particle(s) report it"
+    return (
+        f"STOP sent ({len(campaign.burst)} copies in {campaign.burst[-1]:.1f} s); repeating "
+        f"until all {len(campaign.pending)} known particle(s) report it"
+    )
 
 
 def _set(model: ConsoleModel, args: list[str]) -> str:

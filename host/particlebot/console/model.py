@@ -36,6 +36,17 @@ from particlebot.session import Dropped, Listener, ReceivedFrame, SentFrame
 SILENT_AFTER_S = 6.5
 STOPPED_STATES = frozenset({State.IDLE, State.DONE})
 OBEYED_STOP_STATES = frozenset({State.STOPPING, State.IDLE, State.DONE})
+# The firmware's stop ramp lasts at most 600 ms, so a particle must have STOP within ~0.35 s of
+# the command for its servo to be contracted within 1 s. Four copies 0.1 s apart reach a
+# particle unless all four are lost: 0.16 % of the time at 20 % loss. Each copy that reaches a
+# particle already stopping restarts its ramp from where the body is: up to ~60 ms longer.
+STOP_BURST_S = (0.0, 0.1, 0.2, 0.3)
+# PINGs per round: their STATUS replies (52 bytes each) arrive together and queue in the base
+# radio's serial buffer, which 9600 baud drains at one reply per ~55 ms.
+MAX_PINGS = 4
+# Clock readings are ~1.7e9 s since the epoch, where a float's rounding is ~2e-7 s: a poll at
+# exactly the time a copy is due must not miss it by a rounding error.
+CLOCK_SLACK_S = 1e-6
 
 
 class CommandSink(Protocol):
@@ -100,30 +111,38 @@ class ParticleRow:
 
 @dataclass
 class Campaign:
-    """A command broadcast repeatedly until every targeted particle confirms it, or time runs out.
+    """A command broadcast until every targeted particle confirms it, or time runs out.
 
     802.15.4 broadcasts are not acknowledged, so the only proof a particle obeyed is a STATUS it
-    sent afterwards.
+    sent afterwards. The command goes out once at each offset in `burst` (seconds after
+    `started`). With the last of those copies, and then every `interval`, a round PINGs the
+    particles still pending by id, a few at a time, so that their STATUS comes at once rather
+    than with the next periodic one; a round after the burst repeats the command only if some
+    pending particle `needs_command` (a particle's answer shows it missed it, or none came).
     """
 
     name: str
-    messages: list[Message]
+    command: Message
     started: float
+    burst: tuple[float, ...]
     interval: float
     timeout: float
     pending: set[str]
     confirms: Callable[[ParticleRow, float], bool]
-    acknowledges: Callable[[ParticleRow, float], bool] | None = None
-    """Obeyed but not finished yet (STOPPING): stop repeating `messages`, send `followup`."""
-    followup: list[Message] = field(default_factory=list)
+    needs_command: Callable[[ParticleRow, float], bool]
     confirmed: set[str] = field(default_factory=set)
-    acknowledged: set[str] = field(default_factory=set)
+    rounds: int = 0
+    pings: dict[str, int] = field(default_factory=dict)
+    """PINGs sent to each particle (by key)."""
     next_send: float = 0.0
-    sends: int = 0
     done: bool = False
     success: bool = False
     outcome: str = ""
     finished_at: float | None = None
+
+    @property
+    def burst_sent(self) -> bool:
+        return self.rounds >= len(self.burst)
 
 
 @dataclass(frozen=True)
@@ -134,8 +153,9 @@ class ModelNote:
 
 
 def _fresh(row: ParticleRow, since: float) -> bool:
-    """Whether row's last STATUS was received at or after since."""
-    return row.status_time is not None and row.status_time >= since
+    """Whether row's last STATUS was received after since (one received at the very moment a
+    command went out cannot answer it: the command alone takes milliseconds to arrive)."""
+    return row.status_time is not None and row.status_time > since
 
 
 def _ids_text(rows: list[ParticleRow]) -> str:
@@ -152,19 +172,25 @@ class ConsoleModel(Listener):
         *,
         host_hash: int = DEFINITION_HASH,
         silent_after: float = SILENT_AFTER_S,
-        stop_interval: float = 1.0,
+        stop_burst: tuple[float, ...] = STOP_BURST_S,
+        stop_interval: float = 0.5,
         stop_timeout: float = 10.0,
-        start_interval: float = 2.5,
+        start_interval: float = 0.5,
         start_timeout: float = 8.0,
+        max_pings: int = MAX_PINGS,
     ) -> None:
         self.sink = sink
         self.clock = clock
         self.host_hash = host_hash
         self.silent_after = silent_after
+        if not stop_burst or stop_burst[0] != 0.0 or list(stop_burst) != sorted(stop_burst):
+            raise ValueError("stop_burst: offsets in seconds, the first 0, in order")
+        self.stop_burst = stop_burst
         self.stop_interval = stop_interval
         self.stop_timeout = stop_timeout
         self.start_interval = start_interval
         self.start_timeout = start_timeout
+        self.max_pings = max_pings
         self.particles: dict[str, ParticleRow] = {}
         self.notes: deque[ModelNote] = deque(maxlen=500)
         self.notes_written = 0
@@ -315,22 +341,28 @@ class ConsoleModel(Listener):
             run_id = self.run_id
 
             def confirms(row: ParticleRow, since: float) -> bool:
-                return (
-                    row.status is not None
-                    and row.status_time is not None
-                    and row.status_time >= since
-                    and row.status.run_id == run_id
-                )
+                return _fresh(row, since) and row.status is not None and row.status.run_id == run_id
+
+            def needs_command(row: ParticleRow, since: float) -> bool:
+                # It answered but is in another run: it missed START. The copy carries the same
+                # run_id, so particles already in the run ignore it.
+                return _fresh(row, since) and row.status is not None and row.status.run_id != run_id
 
             return self._launch(
-                "START", [message], self.start_interval, self.start_timeout, confirms
+                "START",
+                message,
+                (0.0,),
+                self.start_interval,
+                self.start_timeout,
+                confirms,
+                needs_command,
             )
 
     def stop(self) -> Campaign:
-        """STOP (and PING, so answers come at once) until every known particle has answered with
-        STOPPING, IDLE or DONE; then PING alone until each reports IDLE or DONE, or stop_timeout
-        passes. (STOP is not repeated to particles that obeyed: it would restart their STOPPING.)
-        """
+        """STOP as a burst (stop_burst), then PINGs until every known particle reports IDLE or
+        DONE, or stop_timeout passes. STOP is repeated after the burst only while some particle
+        has not answered STOPPING, IDLE or DONE since: a copy restarts the stop ramp of a
+        particle that has it already."""
         with self._lock:
             self._cancel("START")
             self._cancel("STOP")
@@ -338,17 +370,17 @@ class ConsoleModel(Listener):
             def confirms(row: ParticleRow, since: float) -> bool:
                 return _fresh(row, since) and row.state in STOPPED_STATES
 
-            def acknowledges(row: ParticleRow, since: float) -> bool:
-                return _fresh(row, since) and row.state in OBEYED_STOP_STATES
+            def needs_command(row: ParticleRow, since: float) -> bool:
+                return not (_fresh(row, since) and row.state in OBEYED_STOP_STATES)
 
             return self._launch(
                 "STOP",
-                [Stop(), Ping(target=BROADCAST_ID)],
+                Stop(),
+                self.stop_burst,
                 self.stop_interval,
                 self.stop_timeout,
                 confirms,
-                acknowledges=acknowledges,
-                followup=[Ping(target=BROADCAST_ID)],
+                needs_command,
             )
 
     def set_param(self, param: int, value: int, target: int = BROADCAST_ID) -> None:
@@ -384,25 +416,24 @@ class ConsoleModel(Listener):
     def _launch(
         self,
         name: str,
-        messages: list[Message],
+        command: Message,
+        burst: tuple[float, ...],
         interval: float,
         timeout: float,
         confirms: Callable[[ParticleRow, float], bool],
-        *,
-        acknowledges: Callable[[ParticleRow, float], bool] | None = None,
-        followup: list[Message] | None = None,
+        needs_command: Callable[[ParticleRow, float], bool],
     ) -> Campaign:
         now = self.clock()
         campaign = Campaign(
             name=name,
-            messages=messages,
+            command=command,
             started=now,
+            burst=burst,
             interval=interval,
             timeout=timeout,
             pending=set(self.particles),
             confirms=confirms,
-            acknowledges=acknowledges,
-            followup=followup or [],
+            needs_command=needs_command,
             next_send=now,
         )
         self.campaigns = [*self.campaigns[-7:], campaign]
@@ -416,17 +447,38 @@ class ConsoleModel(Listener):
                 campaign.outcome = f"{name} superseded"
 
     def _advance(self, campaign: Campaign, now: float) -> None:
-        for key in list(campaign.pending):
+        # Judged on each particle's latest STATUS: one that confirmed can fall back (a late
+        # copy of STOP finds it stopped and it reports STOPPING again, for a moment).
+        for key in campaign.pending | campaign.confirmed:
             row = self.particles.get(key)
-            if row is None:
-                continue
-            if campaign.confirms(row, campaign.started):
+            if row is not None and campaign.confirms(row, campaign.started):
                 campaign.pending.discard(key)
                 campaign.confirmed.add(key)
-            elif campaign.acknowledges is not None and campaign.acknowledges(row, campaign.started):
-                campaign.acknowledged.add(key)
+            else:
+                campaign.confirmed.discard(key)
+                campaign.pending.add(key)
+        # The whole burst goes out even when every known particle has confirmed: particles the
+        # console has not heard of yet have no other chance of getting the command.
+        if now - campaign.started >= campaign.timeout or (
+            campaign.burst_sent and not campaign.pending
+        ):
+            self._conclude(campaign, now)
+        elif now >= campaign.next_send - CLOCK_SLACK_S:
+            self._send_round(campaign, now)
+
+    def _conclude(self, campaign: Campaign, now: float) -> None:
         elapsed = now - campaign.started
-        if not campaign.pending and campaign.confirmed:
+        if campaign.pending:
+            missing = [self.particles[key] for key in campaign.pending]
+            self._finish(
+                campaign,
+                now,
+                False,
+                f"{campaign.name} not confirmed within {campaign.timeout:.0f} s by "
+                f"particle(s) {_ids_text(missing)} ({len(campaign.confirmed)} confirmed); "
+                "check they are switched on and in range, then try again",
+            )
+        elif campaign.confirmed:
             self._finish(
                 campaign,
                 now,
@@ -434,30 +486,45 @@ class ConsoleModel(Listener):
                 f"{campaign.name} confirmed by all {len(campaign.confirmed)} particles "
                 f"in {elapsed:.1f} s",
             )
-            return
-        if elapsed >= campaign.timeout:
-            if campaign.confirmed or campaign.pending:
-                missing = [self.particles[key] for key in campaign.pending]
-                self._finish(
-                    campaign,
-                    now,
-                    False,
-                    f"{campaign.name} not confirmed within {campaign.timeout:.0f} s by "
-                    f"particle(s) {_ids_text(missing)} ({len(campaign.confirmed)} confirmed); "
-                    "check they are switched on and in range, then try again",
-                )
-            else:
-                self._finish(
-                    campaign, now, True, f"{campaign.name} sent; no particles known to confirm it"
-                )
-            return
-        if now >= campaign.next_send:
+        else:
+            self._finish(
+                campaign, now, True, f"{campaign.name} sent; no particles known to confirm it"
+            )
+
+    def _send_round(self, campaign: Campaign, now: float) -> None:
+        index = campaign.rounds
+        campaign.rounds += 1
+        if campaign.rounds < len(campaign.burst):
+            # Offsets from the start, not from this round: a late poll does not delay the rest.
+            campaign.next_send = campaign.started + campaign.burst[campaign.rounds]
+        else:
             campaign.next_send = now + campaign.interval
-            campaign.sends += 1
-            everyone_obeyed = campaign.pending <= campaign.acknowledged and campaign.sends > 1
-            for message in campaign.followup if everyone_obeyed else campaign.messages:
-                if not self._send(message):
-                    break
+        rows = [self.particles[key] for key in campaign.pending]
+        in_burst = index < len(campaign.burst)
+        wanted = in_burst or any(campaign.needs_command(row, campaign.started) for row in rows)
+        if wanted and not self._send(campaign.command):
+            return
+        if campaign.burst_sent:
+            for target in self._ping_targets(campaign):
+                if not self._send(Ping(target=target)):
+                    return
+
+    def _ping_targets(self, campaign: Campaign) -> list[int]:
+        """Ids to PING this round: the pending particles pinged least so far, at most
+        max_pings. Unassigned particles share id 254, so one PING asks all of them."""
+        order = sorted(
+            campaign.pending,
+            key=lambda key: (campaign.pings.get(key, 0), self.particles[key].id, key),
+        )
+        targets: list[int] = []
+        for key in order:
+            particle_id = self.particles[key].id
+            if particle_id not in targets:
+                if len(targets) >= self.max_pings:
+                    continue
+                targets.append(particle_id)
+            campaign.pings[key] = campaign.pings.get(key, 0) + 1
+        return targets
 
     def _finish(self, campaign: Campaign, now: float, success: bool, text: str) -> None:
         campaign.done = True

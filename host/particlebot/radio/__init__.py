@@ -144,7 +144,7 @@ class RadioUrl:
 def _examples() -> str:
     return (
         "serial:///dev/ttyUSB0?baud=9600 (transparent XBee), xbee:///dev/ttyUSB0 (API mode), "
-        "virtual://10 (simulated swarm)"
+        "virtual://10 (simulated swarm), emulated://5 (the firmware image in simavr)"
     )
 
 

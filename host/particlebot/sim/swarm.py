@@ -13,13 +13,13 @@ from __future__ import annotations
 import math
 import struct
 import threading
-import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Self
 
+from particlebot.pacing import Paced, PacedRunner
 from particlebot.protocol import (
     BASE_STATION_ID,
     BROADCAST_ID,
@@ -39,6 +39,8 @@ from particlebot.sim.medium import BASE, BAUD, DEFAULT_BUFFER_BYTES, NOISE, AirP
 from particlebot.virtual.light import ADC_FULL_SCALE, Lamp, LightField
 
 AVCC_MV = 3300
+PACED_STEP_S = 0.01
+"""Emulated time one call of the wall-clock pacing covers, at most."""
 MAX_QUANTUM_US = 3000
 """A particle's byte needs RO (3 characters) of silence plus its airtime before anyone can hear
 it; steps shorter than that let no effect reach another particle within the same step."""
@@ -121,11 +123,16 @@ class HeardFrame:
     frame: Frame
 
 
+BROADCAST_ANSWERS_S = 0.7
+"""A particle answers a broadcast PING in a random one of 10 slots of 60 ms while it knows no group
+size (firmware/lib/particle/particle.h), so that a swarm's answers do not all reach the base
+station's radio at once; the last one is in within this (a STATUS takes 54 ms at 9600 baud)."""
+
 BaseListener = Callable[[int, bytes, float], None]
 """listener(source_index, data, time_s): a packet the base station's radio hands over."""
 
 
-class EmulatedSwarm:
+class EmulatedSwarm(Paced):
     """Particles in a line from a lamp (or at given positions), each the real firmware image."""
 
     def __init__(self, config: SwarmConfig | None = None) -> None:
@@ -165,13 +172,13 @@ class EmulatedSwarm:
         self._inbox_lock = threading.Lock()
         self._seen: list[int] = []
         self.sims: list[ParticleSim] = []
-        self._thread: threading.Thread | None = None
-        self._running = threading.Event()
-        self._error: BaseException | None = None
-        self.wall_origin = time.time()
-        self.speed = 1.0
-        self.achieved_speed = 0.0
-        """Emulated seconds per wall second the stepping thread has managed."""
+        self._runner = PacedRunner(
+            lambda: self.time_s,
+            self._advance,
+            name="emulated-swarm",
+            step_s=PACED_STEP_S,
+            join_timeout_s=10.0,
+        )
         try:
             for index in range(config.count):
                 elf = default_elf(faults=True) if index in config.fault_elf else config.elf
@@ -213,7 +220,7 @@ class EmulatedSwarm:
 
     def epoch(self, time_s: float | None = None) -> float:
         """Simulated time as seconds since the Unix epoch (what radio packets are stamped with)."""
-        return self.wall_origin + (self.time_s if time_s is None else time_s)
+        return self._runner.epoch(time_s)
 
     # ---- the air -----------------------------------------------------------------------------
 
@@ -319,56 +326,12 @@ class EmulatedSwarm:
 
     # ---- running on a thread, paced to the wall clock ----------------------------------------
 
-    def start(self, speed: float = 1.0) -> None:
-        """Steps on a thread, `speed` times faster than real time (math.inf: flat out)."""
-        if speed <= 0:
-            raise ValueError("speed must be positive (math.inf: as fast as possible)")
-        if self._thread is not None:
-            return
-        self.speed = speed
-        self.wall_origin = time.time() - self.time_s
-        self._running.set()
-        self._thread = threading.Thread(target=self._run, name="emulated-swarm", daemon=True)
-        self._thread.start()
-
-    def stop(self) -> None:
-        self._running.clear()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=10)
-        self._thread = None
-
-    @property
-    def error(self) -> BaseException | None:
-        """What stopped the stepping thread, if something did."""
-        return self._error
-
-    def _run(self) -> None:
-        wall_start = time.monotonic()
-        sim_start = self.time_s
-        try:
-            while self._running.is_set():
-                now = time.monotonic()
-                if math.isinf(self.speed):
-                    target = self.time_s + 0.05
-                else:
-                    target = sim_start + (now - wall_start) * self.speed
-                    if target - self.time_s > 0.25:
-                        # Slower than asked: fall behind gracefully instead of bursting.
-                        sim_start, wall_start = self.time_s, now
-                        target = self.time_s + 0.05
-                batch_end = time.monotonic() + 0.1
-                while self.time_s < target and self._running.is_set():
-                    self.run_until(min(target, self.time_s + 0.01))
-                    if time.monotonic() > batch_end:
-                        break
-                elapsed = time.monotonic() - wall_start
-                if elapsed > 0:
-                    self.achieved_speed = (self.time_s - sim_start) / elapsed
-                if not math.isinf(self.speed):
-                    time.sleep(0.005)
-        except BaseException as exc:  # reported through error; the radio tells the console
-            self._error = exc
-            self._running.clear()
+    def _advance(self, target: float) -> bool:
+        if self.time_s >= target:
+            return False
+        # Short runs keep the console's view of the air fresh and stop() prompt.
+        self.run_until(min(target, self.time_s + PACED_STEP_S))
+        return True
 
     # ---- lifetime ----------------------------------------------------------------------------
 
@@ -436,16 +399,18 @@ class BaseStation:
         return latest
 
     def ping_all(
-        self, timeout_s: float = 1.0, ids: Sequence[int] | None = None, attempts: int = 3
+        self, timeout_s: float = 1.5, ids: Sequence[int] | None = None, attempts: int = 3
     ) -> dict[int, Status]:
         """A STATUS from every particle (default: the swarm's ids) asked for now: one broadcast
-        PING, then PINGs to each silent one (replies to a broadcast all come at once and can
-        overflow the base radio's buffer, or be lost). Missing ids did not answer."""
+        PING, whose answers spread over up to BROADCAST_ANSWERS_S, then PINGs to each silent one
+        (an answer can be lost, or dropped by a full radio buffer), which answer at once. Missing
+        ids did not answer."""
         wanted = set(self.swarm.ids if ids is None else ids)
         asked = self.send(Ping(target=BROADCAST_ID))
-        per_attempt = timeout_s / attempts
-        for _ in range(attempts):
-            self.swarm.run_until_true(lambda: wanted <= set(self.statuses(asked)), per_attempt)
+        first = min(timeout_s, BROADCAST_ANSWERS_S)
+        waits = [first] + [(timeout_s - first) / max(1, attempts - 1)] * (attempts - 1)
+        for wait_s in waits:
+            self.swarm.run_until_true(lambda: wanted <= set(self.statuses(asked)), wait_s)
             missing = wanted - set(self.statuses(asked))
             if not missing:
                 break

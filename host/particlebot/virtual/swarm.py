@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
 
+from particlebot.pacing import Paced, PacedRunner
 from particlebot.protocol import BASE_STATION_ID, UNASSIGNED_ID, SetId, encode_frame
 from particlebot.virtual.air import VirtualAir
 from particlebot.virtual.light import Lamp, LightField
@@ -88,7 +88,7 @@ class _Member:
     adc_x: float = math.nan
 
 
-class VirtualSwarm:
+class VirtualSwarm(Paced):
     """Particles in a line away from a lamp, stepped together on one simulated clock.
 
     step() advances 5 ms; start(speed) runs steps on a thread, `speed` times faster than real time
@@ -138,11 +138,9 @@ class VirtualSwarm:
             )
         self._snapshot: list[ParticleSnapshot] = []
         self._take_snapshot()
-        self._thread: threading.Thread | None = None
-        self._running = threading.Event()
-        self.wall_origin = time.time()
-        self.speed = 1.0
-        self.achieved_speed = 0.0
+        self._runner = PacedRunner(
+            lambda: self.t, self._advance, name="virtual-swarm", step_s=STEP_S
+        )
 
     # ---- wiring ----------------------------------------------------------------------------
 
@@ -157,7 +155,7 @@ class VirtualSwarm:
 
     def epoch(self, sim_t: float | None = None) -> float:
         """Simulated time as seconds since the epoch (what packets are stamped with)."""
-        return self.wall_origin + (self.t if sim_t is None else sim_t)
+        return self._runner.epoch(sim_t)
 
     def node_name(self, node: int) -> str:
         return f"virtual-{node:02d}"
@@ -246,43 +244,8 @@ class VirtualSwarm:
 
     # ---- running on a thread ---------------------------------------------------------------
 
-    def start(self, speed: float = 1.0) -> None:
-        if speed <= 0:
-            raise ValueError("speed must be positive (math.inf: as fast as possible)")
-        if self._thread is not None:
-            return
-        self.speed = speed
-        self.wall_origin = time.time() - self.t
-        self._running.set()
-        self._thread = threading.Thread(target=self._run, name="virtual-swarm", daemon=True)
-        self._thread.start()
-
-    def stop(self) -> None:
-        self._running.clear()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5)
-        self._thread = None
-
-    def _run(self) -> None:
-        wall_start = measured_wall = time.monotonic()
-        sim_start = measured_sim = self.t
-        while self._running.is_set():
-            now = time.monotonic()
-            if math.isinf(self.speed):
-                target = self.t + 0.05
-            else:
-                target = sim_start + (now - wall_start) * self.speed
-            steps = 0
-            while self.t + STEP_S <= target + 1e-9 and steps < 400 and self._running.is_set():
-                self.step()
-                steps += 1
-            elapsed = time.monotonic() - measured_wall
-            if elapsed > 0:
-                self.achieved_speed = (self.t - measured_sim) / elapsed
-            if not math.isinf(self.speed) and target - self.t > 0.25:
-                # The CPU cannot keep up with the asked speed: run slower rather than in bursts.
-                sim_start, wall_start = self.t, time.monotonic()
-            if math.isinf(self.speed):
-                time.sleep(0)
-            else:
-                time.sleep(max(0.0005, min(0.01, STEP_S / self.speed)))
+    def _advance(self, target: float) -> bool:
+        if self.t + STEP_S > target + 1e-9:
+            return False
+        self.step()
+        return True

@@ -5,8 +5,9 @@
 Needs `make firmware harness`. Prints, for the README:
 1. emulated seconds per wall second for 1 and 5 particles (idle, and 5 while running a wave);
 2. the servo's frame timing while particles sample their photocells and the radio is busy: pulse
-   period and width jitter, and how often a 20 ms step of a cycle shows a frame late (repeated)
-   or early (skipped);
+   period and width jitter, and how many frames of a cycle show the step before theirs
+   (repeated), the step after (skipped), or no commanded width exactly (an edge delayed by
+   another interrupt);
 3. how long a method-D estimation round takes for 5, 10 and 20 particles at 9600 baud: from
    START until the last INTENSITY broadcast of the round has reached every particle, against
    the airtime lower bound, and whether every S_n came out right.
@@ -23,7 +24,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from particlebot.firmware.native import estimate
+from particlebot.firmware.native import NativeParticle, estimate
 from particlebot.protocol import (
     BROADCAST_ID,
     PARAM_SPECS,
@@ -32,6 +33,7 @@ from particlebot.protocol import (
     Param,
     Ping,
     Start,
+    encode_frame,
 )
 from particlebot.sim import CPU_HZ, BaseStation, EmulatedSwarm, ServoPulse, SwarmConfig
 from particlebot.sim.medium import BASE, NOISE
@@ -51,12 +53,17 @@ INTENSITY_FRAME_BYTES = 8 + Intensity.PAYLOAD_SIZE  # 14: the frame overhead and
 REPEATS = PARAM_SPECS[Param.BROADCAST_REPEATS].default
 
 
-def start_message(run_id: int, method: Method = Method.COUNTING) -> Start:
+def start_message(
+    run_id: int,
+    method: Method = Method.COUNTING,
+    cycle_steps: int = CYCLE_STEPS,
+    wave_size: int = 0,
+) -> Start:
     return Start(
         run_id=run_id,
         method=int(method),
-        cycle_steps=CYCLE_STEPS,
-        wave_size=0,
+        cycle_steps=cycle_steps,
+        wave_size=wave_size,
         update_interval_s=0,
         phototaxis=0,
     )
@@ -83,31 +90,60 @@ def emulation_speed(count: int, seconds: float, running: bool) -> float:
 # ---- 2. servo timing under load ---------------------------------------------------------------
 
 
+def commanded_cycle_us(steps: int) -> list[int]:
+    """The pulse (us) the firmware logic commands at each step 0..steps of a cycle with the
+    default settings, from the logic itself (the native library): what a frame must show exactly
+    unless an interrupt delayed one of its edges."""
+    with NativeParticle() as particle:
+        particle.set_adc([600] * 6)
+        particle.tick(100)
+        particle.receive(encode_frame(start_message(1, cycle_steps=steps, wave_size=1), 0, 0))
+        # Alone, S_n = 1 and t_I = 0: the cycle starts ROUND_MS after START.
+        begin = 100 + PARAM_SPECS[Param.ROUND_MS].default
+        pulses = []
+        for k in range(steps + 1):
+            particle.tick(begin + k * round(STEP_S * 1000))
+            pulses.append(particle.servo_pulse_us)
+        return pulses
+
+
+EXACT_US = 0.3
+"""A frame shows a commanded pulse exactly, within the harness's resolution (1/8 us) and the
+interrupts' equal entry latency."""
+
+
 def step_errors(
-    pulses: Sequence[ServoPulse], contracted: float, profile: list[float]
-) -> tuple[int, int, int]:
-    """Frames of cycles that show their own step, the step before (a repeat: the loop set the
-    new width after the frame began) or the step after (a skip), where neighbouring steps
-    differ by 4 us or more so that the edge jitter cannot blur them."""
-    on_time = late = early = 0
+    pulses: Sequence[ServoPulse], contracted: float, commanded: list[int]
+) -> tuple[int, int, int, int]:
+    """For the frames of every cycle wholly in pulses: how many show their own step, the step
+    before (a repeat: the new width came after the frame began), the step after (a skip), or none
+    of them exactly (an interrupt delayed an edge by some microseconds). Step 0 of each cycle is
+    placed where the most frames match exactly, near where eq. 4's rising flank puts it."""
+    on_time = late = early = jittered = 0
     index = {round(p.start_s * 1e6): i for i, p in enumerate(pulses)}
-    rise = [w - profile[0] for w in profile]
+    offset = contracted - commanded[0]  # the resting pulse as measured, less as commanded
+
+    def shows(frame: int, step: int) -> bool:
+        if not 0 <= step <= CYCLE_STEPS:
+            return False
+        return abs(pulses[frame].width_us - offset - commanded[step]) <= EXACT_US
+
     for start in cycle_starts(pulses, CYCLE_STEPS, contracted):
-        j = index[round(start * 1e6)]
-        for k in range(2, CYCLE_STEPS - 2):
-            if j + k >= len(pulses):
-                break
-            if min(abs(rise[k] - rise[k - 1]), abs(rise[k + 1] - rise[k])) < 4:
-                continue
-            measured = pulses[j + k].width_us - contracted
-            nearest = min(range(k - 2, k + 3), key=lambda s: abs(rise[s] - measured))
-            if nearest == k:
+        guess = index[round(start * 1e6)]
+        candidates = [j for j in range(guess - 3, guess + 4) if 0 <= j <= len(pulses) - CYCLE_STEPS]
+        if not candidates:
+            continue  # not wholly recorded
+        j = max(candidates, key=lambda c: sum(shows(c + k, k) for k in range(CYCLE_STEPS)))
+        for k in range(1, CYCLE_STEPS):
+            if shows(j + k, k):
                 on_time += 1
-            elif nearest < k:
+            elif shows(j + k, k - 1):
                 late += 1
-            else:
+            elif shows(j + k, k + 1):
                 early += 1
-    return on_time, late, early
+            else:
+                jittered += 1
+    return on_time, late, early, jittered
 
 
 def servo_timing(seconds: float) -> dict[str, float]:
@@ -131,8 +167,11 @@ def servo_timing(seconds: float) -> dict[str, float]:
             swarm.run_for(0.05)
         periods: list[float] = []
         rest_widths: list[float] = []
-        missed = on_time = late = early = 0
+        missed = on_time = late = early = jittered = 0
+        commanded = commanded_cycle_us(CYCLE_STEPS)
+        # The logic's arithmetic is eq. 4 through the calibration table (to the microsecond).
         profile = cycle_profile_us(CYCLE_STEPS)
+        assert all(abs(c - p) <= 1 for c, p in zip(commanded, profile, strict=True))
         for sim, contracted in zip(swarm.sims, resting, strict=True):
             pulses = [p for p in sim.servo_pulses if p.start_s >= measure_from]
             periods += [abs(e) for e in period_errors_us(pulses)]
@@ -145,8 +184,9 @@ def servo_timing(seconds: float) -> dict[str, float]:
                 for p in pulses
                 if not any(c - STEP_S / 2 <= p.start_s <= c + CYCLE_T_S for c in cycles)
             ]
-            counts = step_errors(since_start, contracted, profile)
+            counts = step_errors(since_start, contracted, commanded)
             on_time, late, early = on_time + counts[0], late + counts[1], early + counts[2]
+            jittered += counts[3]
         periods.sort()
         rest_widths.sort()
         return {
@@ -157,9 +197,10 @@ def servo_timing(seconds: float) -> dict[str, float]:
             "rest_width_error_p99_us": rest_widths[int(0.99 * (len(rest_widths) - 1))],
             "rest_width_error_max_us": rest_widths[-1],
             "missed_frames": missed,
-            "cycle_frames_checked": on_time + late + early,
+            "cycle_frames_checked": on_time + late + early + jittered,
             "cycle_frames_repeated_step": late,
             "cycle_frames_skipped_step": early,
+            "cycle_frames_edge_delayed": jittered,
         }
 
 

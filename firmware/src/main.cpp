@@ -36,12 +36,16 @@ namespace {
 // ---- servo on D9 (PB5): Timer1 in CTC mode, 1 tick = 1 us -------------------------------------
 
 const uint16_t kServoFrameUs = 20000;  // 50 Hz frames
+const uint16_t kServoFrameMs = 20;
 const uint16_t kServoMinUs = 500;
 const uint16_t kServoMaxUs = 2500;
+static_assert(kServoFrameMs == pb::kStepMs, "one servo step per frame");
 
 // Compare value for the falling edge; the loop writes it, TIMER1_COMPA_vect reads it at the start
 // of each frame, so a pulse never changes width half-way.
 volatile uint16_t g_servo_fall_tick = 1500 - 1;
+// Start of the current frame in ms since servo_begin(), advanced by TIMER1_COMPA_vect.
+volatile uint32_t g_frame_start_ms = 0;
 
 void servo_set(uint16_t pulse_us) {
   if (pulse_us < kServoMinUs) pulse_us = kServoMinUs;
@@ -68,6 +72,32 @@ void servo_begin(uint16_t pulse_us) {
   TIFR1 = _BV(OCF1A) | _BV(OCF1B);
   TIMSK1 = _BV(OCIE1A) | _BV(OCIE1B);
   TCCR1B = _BV(WGM12) | _BV(CS11);  // CTC with TOP = OCR1A, clk/8 = 1 MHz at 8 MHz
+}
+
+// ---- clock: the servo frames ----------------------------------------------------------------
+
+// The logic runs on Timer1 rather than millis(): the frames and the counter within one give the
+// time to the millisecond (millis() moves in 2-3 ms jumps at 8 MHz), and, above all, the servo
+// steps can be worked out for the frame that will show them. Time 0 is servo_begin().
+struct Clock {
+  uint32_t frame_ms;  // start of the current frame
+  uint16_t us;        // into it
+
+  uint32_t ms() const { return frame_ms + us / 1000u; }
+  // Start of the next frame: the pulse set now is the one it carries.
+  uint32_t next_frame_ms() const { return frame_ms + kServoFrameMs; }
+};
+
+Clock clock_now() {
+  Clock c;
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    c.frame_ms = g_frame_start_ms;
+    c.us = TCNT1;
+    // The counter has wrapped but the interrupt that counts the new frame has not run yet. (The
+    // flag rises while TCNT1 still reads TOP, hence the comparison, not just the flag.)
+    if ((TIFR1 & _BV(OCF1A)) && c.us < kServoFrameUs / 2) c.frame_ms += kServoFrameMs;
+  }
+  return c;
 }
 
 // ---- ADC: one conversion in flight, collected on a later loop pass ---------------------------
@@ -153,7 +183,35 @@ void serial_receive(uint32_t now_ms) {
   }
 }
 
-void serial_transmit() {
+// A transparent XBee sends what its host wrote once RO = 3 character times (3.1 ms at 9600 baud)
+// pass without a byte, or at once at 100 bytes. Frames written back to back (two STATUS frames
+// are 104 B) would be cut apart, and every receiver would get other radios' packets between the
+// pieces. So each frame goes out alone: handed over whole, then the line stays silent from its
+// last stop bit for a gap well beyond RO before the next frame: at least 5 ms, as 6 ticks of the
+// millisecond clock.
+const uint8_t kInterFrameGapMs = 6;
+
+enum TxPhase : uint8_t { kTxReady, kTxDraining, kTxGap };
+TxPhase g_tx_phase = kTxReady;
+uint32_t g_tx_gap_from_ms = 0;
+
+// What HardwareSerial::flush() waits for, without the waiting: its buffer is empty (the
+// data-register-empty interrupt is off) and the last stop bit has left (TXC1; write() clears it).
+bool serial1_drained() {
+  return !(UCSR1B & _BV(UDRIE1)) && (UCSR1A & _BV(TXC1));
+}
+
+void serial_transmit(uint32_t now_ms) {
+  if (g_tx_phase == kTxDraining) {
+    if (!serial1_drained()) return;
+    g_tx_gap_from_ms = now_ms;
+    g_tx_phase = kTxGap;
+  }
+  if (g_tx_phase == kTxGap) {
+    if (now_ms - g_tx_gap_from_ms < kInterFrameGapMs) return;
+    g_tx_phase = kTxReady;
+  }
+  // After the gap the 64-byte buffer is empty, so a whole frame (<= 56 B) fits at once.
   uint8_t chunk[16];
   int room = Serial1.availableForWrite();
   while (room > 0) {
@@ -163,6 +221,10 @@ void serial_transmit() {
     if (got == 0) return;
     Serial1.write(chunk, got);
     room -= static_cast<int>(got);
+    if (!g_particle->tx_frame_open()) {
+      g_tx_phase = kTxDraining;
+      return;
+    }
   }
 }
 
@@ -201,6 +263,7 @@ void fault_check() {
 ISR(TIMER1_COMPA_vect) {
   PORTB |= _BV(PORTB5);
   OCR1B = g_servo_fall_tick;  // not double-buffered in CTC mode: set it while the pulse is high
+  g_frame_start_ms = g_frame_start_ms + kServoFrameMs;
 }
 
 ISR(TIMER1_COMPB_vect) {
@@ -215,7 +278,7 @@ void setup() {
   const uint32_t seed = seed_from_noise();
   g_particle = new (g_particle_memory) pb::Particle(g_storage, reset_flags, seed);
   Serial1.begin(9600);
-  g_particle->begin(millis());
+  g_particle->begin(0);  // the clock starts with the servo's frames
   servo_begin(g_particle->servo_pulse_us());
   wdt_enable(WDTO_250MS);
 }
@@ -225,12 +288,15 @@ void loop() {
 #ifdef PARTICLE_FAULT_INJECTION
   fault_check();
 #endif
-  const uint32_t now_ms = millis();
+  const Clock clock = clock_now();
+  const uint32_t now_ms = clock.ms();
   serial_receive(now_ms);
   adc_poll();
-  g_particle->tick(now_ms);
+  // The new step is worked out in the first pass of a frame, and set long before the next frame
+  // latches it: every frame shows exactly one step, the one due when it begins.
+  g_particle->tick(now_ms, clock.next_frame_ms());
   servo_set(g_particle->servo_pulse_us());
-  serial_transmit();
+  serial_transmit(now_ms);
 }
 
 #ifdef PARTICLE_NO_USB

@@ -126,12 +126,28 @@ def test_ping_is_answered_at_once_when_addressed(bench: Bench) -> None:
     bench.collect()
     bench.send(Ping(target=77))
     assert bench.collect() == []
-    bench.send(Ping(target=BROADCAST_ID))
+    bench.send(Ping(target=UNASSIGNED_ID))
     bench.send(Ping(target=UNASSIGNED_ID))
     replies = bench.collect()
     assert len(statuses(replies)) == 2
     assert replies[1].seq == (replies[0].seq + 1) & 0xFF
     assert all(f.sender == UNASSIGNED_ID for f in replies)
+
+
+def test_a_broadcast_ping_is_answered_in_a_random_60_ms_slot(bench: Bench) -> None:
+    # Every particle answering a broadcast at once would flood the base station's radio.
+    assert bench.set_param(Param.STATUS_PERIOD_MS, 60000).result == ParamResult.OK
+    bench.advance(2100)  # the periodic STATUS drawn at boot is out; the next is 45 s away
+    delays = []
+    for _ in range(30):
+        bench.collect()
+        bench.send(Ping(target=BROADCAST_ID))
+        asked = bench.now
+        bench.particle.tick(bench.now)
+        bench.wait_for(lambda: bool(statuses(bench.collect())), 1000)
+        delays.append(bench.now - asked)
+    assert all(d % 60 == 0 and 0 <= d < 600 for d in delays), delays
+    assert len(set(delays)) >= 6, delays  # ten slots, none favoured
 
 
 def test_identify_wiggles_an_idle_particle_three_times_then_idles(bench: Bench) -> None:

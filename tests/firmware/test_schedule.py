@@ -281,5 +281,5 @@ def test_phototaxis_stops_when_the_light_no_longer_increases(bench: Bench) -> No
     status = bench.status()
     assert status.state == State.DONE
     assert status.radius_um == R_MIN
-    bench.send(Ping(target=BROADCAST_ID))
+    bench.send(Ping(target=bench.particle.id))
     assert any(isinstance(f.message, Status) for f in bench.collect())

@@ -29,9 +29,8 @@ CYCLE_STEPS = 75
 T_S = CYCLE_STEPS * STEP_S
 ROUND_MS = 1000
 ROUND_S = ROUND_MS / 1000
-# The particle schedules in whole milliseconds of millis(), which at 8 MHz moves in 2 or 3 ms
-# jumps (one Timer0 overflow is 2.048 ms): a scheduled instant is seen up to that much late, and
-# START's arrival up to that much early.
+# The particle stamps START with its millisecond clock (servo frames counted on Timer1), read once
+# per pass of its main loop and truncated: within a millisecond or so of the last byte's arrival.
 CLOCK_TICK_S = 0.003
 
 
@@ -168,7 +167,7 @@ def test_each_particle_estimates_as_the_firmware_library_does_and_moves_at_its_t
         starts = expansions_s(swarm, index, received[index])
         assert len(starts) >= 2, f"particle {swarm.ids[index]}: {starts}"
         late_s = starts[0] - (common_start[index] + delays_s[index])
-        # The 50 Hz frames run freely: the one that shows step 0 starts up to a step later.
+        # Step 0 goes out in the first 50 Hz frame that begins at or after its instant.
         assert -CLOCK_TICK_S <= late_s <= STEP_S + CLOCK_TICK_S, f"particle {swarm.ids[index]}"
         pause_measured = starts[1] - starts[0] - T_S
         assert abs(pause_measured - pause_s) <= STEP_S, f"particle {swarm.ids[index]}"

@@ -10,7 +10,6 @@ import pytest
 
 from particlebot.protocol import (
     BASE_STATION_ID,
-    BROADCAST_ID,
     DEFINITION_HASH,
     PARAM_SPECS,
     UNASSIGNED_ID,
@@ -36,7 +35,7 @@ MCUSR_WATCHDOG = 0x08
 CONTRACTED_US = PARAM_SPECS[Param.SERVO_CAL_0].default
 ROUND_S = PARAM_SPECS[Param.ROUND_MS].default / 1000
 STATUS_PERIOD_S = PARAM_SPECS[Param.STATUS_PERIOD_MS].default / 1000
-# An edge of the servo pulse waits while another interrupt (millis, Serial1) finishes; the longest,
+# An edge of the servo pulse waits while another interrupt (Timer0, Serial1) finishes; the longest,
 # Serial1's transmit interrupt, takes ~120 cycles (15 us). tools/bench_sim.py saw 14.25 us.
 SERVO_JITTER_US = 20
 # Photocell voltages all different, so a mix-up of the A0..A5 channels shows.
@@ -88,8 +87,9 @@ class Base:
                 found.append((time_s, frame, frame.message))
         return found
 
-    def ping(self, target: int = BROADCAST_ID) -> tuple[Frame, Status]:
-        """Asks for a STATUS and returns the one that answers it."""
+    def ping(self, target: int = UNASSIGNED_ID) -> tuple[Frame, Status]:
+        """Asks for a STATUS and returns the one that answers it. The default target is a blank
+        particle's id: a PING to its id is answered at once (a broadcast one within 0.6 s)."""
         asked_at = self.sim.time_s
         self.send(Ping(target=target))
         self.run(0.3)
@@ -132,7 +132,7 @@ def test_commands_reach_the_particle_at_the_pace_of_a_9600_baud_line(particle):
     while not base.statuses():  # the first periodic STATUS, well clear of the next one
         base.run(0.1)
     base.run(0.05)
-    ping = encode_frame(Ping(target=BROADCAST_ID), BASE_STATION_ID, 0)
+    ping = encode_frame(Ping(target=UNASSIGNED_ID), BASE_STATION_ID, 0)
     sent_s = particle.time_s
     particle.send_uart(ping)
     base.run(0.1)

@@ -93,7 +93,15 @@ void pb_particle_tick(pb_particle *particle, uint32_t now_ms) {
 }
 
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity) {
-  return particle->particle.take_tx(out, capacity);
+  // take_tx() stops at each frame's end; the PC side gets as many frames as fit, since the
+  // virtual air times and packetises the bytes itself.
+  size_t n = 0;
+  while (n < capacity) {
+    const size_t got = particle->particle.take_tx(out + n, capacity - n);
+    if (got == 0) break;
+    n += got;
+  }
+  return n;
 }
 
 uint8_t pb_particle_id(const pb_particle *particle) {

@@ -26,6 +26,7 @@ Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
       boot_ms_(0),
       last_rx_ms_(0),
       next_status_ms_(0),
+      ping_reply_ms_(0),
       radius_um_(0),
       pulse_us_(0),
       servo_start_ms_(0),
@@ -36,10 +37,12 @@ Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
       tx_dropped_(0),
       tx_head_(0),
       tx_count_(0),
+      tx_frame_left_(0),
       record_run_(0),
       seq_(0),
       reset_cause_(reset_cause),
       rx_idle_pending_(false),
+      ping_reply_pending_(false),
       readings_awaited_(0) {
   geometry_.r_min_um = 0;
   geometry_.r_max_um = 0;
@@ -70,7 +73,7 @@ void Particle::on_rx_byte(uint8_t byte, uint32_t now_ms) {
   if (parser_.push(byte)) handle_frame(parser_.frame(), now_ms);
 }
 
-void Particle::tick(uint32_t now_ms) {
+void Particle::tick(uint32_t now_ms, uint32_t servo_ms) {
   now_ms_ = now_ms;
   if (rx_idle_pending_ && time_reached(now_ms, last_rx_ms_ + kFrameTimeoutMs)) {
     rx_idle_pending_ = false;
@@ -87,19 +90,28 @@ void Particle::tick(uint32_t now_ms) {
       finish_round();
     }
   }
-  update_servo(now_ms);
+  update_servo(servo_ms);
   if (time_reached(now_ms, next_status_ms_)) {
     send_status();
     schedule_status(now_ms);
   }
+  if (ping_reply_pending_ && time_reached(now_ms, ping_reply_ms_)) send_status();
 }
 
 size_t Particle::take_tx(uint8_t *out, size_t capacity) {
+  // send() queues whole frames only, so between frames the head is a sync byte and its LEN
+  // byte, two further on, tells how long the frame is.
+  if (tx_frame_left_ == 0 && tx_count_ > 0) {
+    const uint8_t len = tx_[(tx_head_ + 2) % kTxCapacity];
+    tx_frame_left_ = static_cast<uint8_t>(len + kFrameOverhead);
+    if (tx_frame_left_ > tx_count_) tx_frame_left_ = tx_count_;  // cannot happen; stay bounded
+  }
   size_t n = 0;
-  while (n < capacity && tx_count_ > 0) {
+  while (n < capacity && tx_frame_left_ > 0) {
     out[n++] = tx_[tx_head_];
     tx_head_ = static_cast<uint8_t>((tx_head_ + 1) % kTxCapacity);
     --tx_count_;
+    --tx_frame_left_;
   }
   return n;
 }
@@ -178,7 +190,12 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
     }
     case MessageType::PING: {
       PingMessage m;
-      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) send_status();
+      if (!m.decode(frame.payload, frame.length) || !addressed_to_me(m.target)) break;
+      if (m.target == kBroadcastId) {
+        schedule_ping_reply(now_ms);
+      } else {
+        send_status();
+      }
       break;
     }
     case MessageType::IDENTIFY: {
@@ -348,6 +365,8 @@ void Particle::send(MessageType type, const uint8_t *payload, uint8_t len) {
 }
 
 void Particle::send_status() {
+  // Any STATUS answers a PING still waiting for its slot.
+  ping_reply_pending_ = false;
   uint8_t payload[StatusMessage::kPayloadSize];
   send(MessageType::STATUS, payload, status_payload(payload));
 }
@@ -375,6 +394,18 @@ void Particle::schedule_status(uint32_t now_ms) {
   // +-25 % jitter: particles that started together drift apart instead of colliding every time.
   const uint32_t period = static_cast<uint32_t>(settings_.get(Param::STATUS_PERIOD_MS));
   next_status_ms_ = now_ms + period * (75u + rng_.below(51)) / 100u;
+}
+
+void Particle::schedule_ping_reply(uint32_t now_ms) {
+  // A repeated broadcast PING keeps the slot already drawn: the answer is on its way.
+  if (ping_reply_pending_) return;
+  // A group of one tells nothing: method A never listens, and a particle that heard nobody may
+  // still share the base station with others.
+  uint8_t slots = coordinator_.group_size();
+  if (slots <= 1) slots = kPingSlotsUnknown;
+  if (slots > kPingSlotsMax) slots = kPingSlotsMax;
+  ping_reply_ms_ = now_ms + static_cast<uint32_t>(rng_.below(slots)) * kPingSlotMs;
+  ping_reply_pending_ = true;
 }
 
 }  // namespace pb

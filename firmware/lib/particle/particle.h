@@ -22,6 +22,13 @@ class Particle {
  public:
   // Bytes of radio output that can wait for Serial1; a frame that does not fit is dropped whole.
   static const uint8_t kTxCapacity = 128;
+  // A broadcast PING is answered in a random one of this many slots once a round has told the
+  // group size (kPingSlotsUnknown before): a swarm answering at once would overflow the base
+  // station's 9600-baud radio. A slot holds one STATUS frame on the air (52 B: 54 ms at 9600),
+  // and at most kPingSlotsMax slots keep every answer within a second.
+  static const uint16_t kPingSlotMs = 60;
+  static const uint8_t kPingSlotsUnknown = 10;
+  static const uint8_t kPingSlotsMax = 16;
 
   // reset_cause: MCUSR at boot (reported in STATUS). rng_seed: anything that differs between
   // particles (ADC noise on the real one) so their STATUS and INTENSITY timings spread out.
@@ -39,13 +46,24 @@ class Particle {
   void on_rx_byte(uint8_t byte, uint32_t now_ms);
   // Runs whatever fell due by now_ms: schedule transitions, broadcasts, STATUS, servo target.
   // Call often (every loop pass); a late call catches up without shifting the schedule.
-  void tick(uint32_t now_ms);
+  // servo_ms is the instant the pulse read afterwards starts to show: main.cpp passes the start
+  // of the next 50 Hz frame, so that every frame shows exactly the step due when it begins
+  // (sampling the motion at now_ms would let a frame repeat or skip a step whenever a step
+  // boundary falls near a frame boundary). The one-argument form samples at now_ms.
+  void tick(uint32_t now_ms, uint32_t servo_ms);
+  void tick(uint32_t now_ms) { tick(now_ms, now_ms); }
 
   // Pulse the servo driver must output from its next 50 Hz frame (500..2500 us).
   uint16_t servo_pulse_us() const { return pulse_us_; }
   uint32_t radius_um() const { return radius_um_; }
-  // Moves up to capacity queued bytes into out; returns how many.
+  // Moves up to capacity queued bytes into out; returns how many. Never goes past the end of the
+  // frame at the head of the queue, so an owner can tell frames apart (see tx_frame_open()).
   size_t take_tx(uint8_t *out, size_t capacity);
+  // True while part of the head frame has been taken and the rest has not. main.cpp hands a
+  // frame to Serial1 and then keeps the line silent for longer than the XBee's packetisation
+  // timeout before the next one, so that every frame leaves as an RF packet of its own: two
+  // frames back to back can exceed one RF payload (100 B) and be cut apart in the air.
+  bool tx_frame_open() const { return tx_frame_left_ > 0; }
   uint8_t id() const { return settings_.id(); }
 
   // ---- inspection, for the PC build and tests ----
@@ -73,6 +91,7 @@ class Particle {
   void send_intensity();
   void send_param_value(uint8_t param, ParamResult result, int32_t value);
   void schedule_status(uint32_t now_ms);
+  void schedule_ping_reply(uint32_t now_ms);
   bool addressed_to_me(uint8_t target) const;
 
   Settings settings_;
@@ -87,6 +106,7 @@ class Particle {
   uint32_t boot_ms_;
   uint32_t last_rx_ms_;
   uint32_t next_status_ms_;
+  uint32_t ping_reply_ms_;  // when the pending answer to a broadcast PING is due
   uint32_t radius_um_;
   uint16_t pulse_us_;
   uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
@@ -97,10 +117,12 @@ class Particle {
   uint16_t tx_dropped_;
   uint8_t tx_head_;
   uint8_t tx_count_;
+  uint8_t tx_frame_left_;  // bytes of the head frame not taken yet; 0 between frames
   uint8_t record_run_;
   uint8_t seq_;
   uint8_t reset_cause_;
-  bool rx_idle_pending_;  // bytes arrived since the last parser timeout
+  bool rx_idle_pending_;     // bytes arrived since the last parser timeout
+  bool ping_reply_pending_;  // a broadcast PING awaits its STATUS
   // Readings still to complete before the round's own: 2 when a round starts mid-reading (that
   // reading mixes in light from before the round), 1 otherwise, 0 once round_intensity_ is set.
   uint8_t readings_awaited_;

@@ -25,8 +25,9 @@ const uint8_t kServoTablePoints = 9;
 
 // EEPROM layout, all little-endian, one block from address 0:
 //   0-1 magic 'P' 'B' | 2 layout version | 3 parameter count | 4 id | 5 resets | 6 last reset cause
-//   7.. one int32 per parameter id 0..kParamSlots - 1 (ids the protocol lacks hold 0) | CRC-16 of
-//   bytes 0 .. the last value (CCITT-FALSE, as on the radio).
+//   7.. one int32 per parameter id 0..kParamSlots - 1 | CRC-16 of bytes 0 .. the last value
+//   (CCITT-FALSE, as on the radio). Slots of ids the protocol lacks are never written: they keep
+//   what the EEPROM held (erased 0xFF bytes on a new chip), and the CRC covers them as they are.
 // Indexing by parameter id wastes a little EEPROM (of 1 KB) but no flash on lookups. The values
 // are not mirrored in RAM: they are read from the EEPROM when used (a few microseconds each),
 // which keeps about 90 bytes of the 2.5 KB SRAM free.

@@ -18,7 +18,7 @@ class RamStorage : public pb::Storage {
 
 // A particle on the bench: a RAM EEPROM, constant light, and a base station to talk to it.
 struct Bench {
-  Bench() : particle(storage, 1, 99), now(0), seq(0) {
+  explicit Bench(uint32_t seed = 99) : particle(storage, 1, seed), now(0), seq(0) {
     particle.begin(0);
     advance(50);  // a first reading
   }
@@ -72,12 +72,12 @@ pb::StatusMessage status_of(const pb::Frame &f) {
 
 }  // namespace
 
-TEST_CASE("PING is answered at once with a STATUS carrying the definition hash") {
+TEST_CASE("a PING to its id is answered at once with a STATUS carrying the definition hash") {
   Bench b;
   pb::Frame frames[4];
   b.drain(frames, 4);  // whatever STATUS went out at boot
   pb::PingMessage ping;
-  ping.target = pb::kBroadcastId;
+  ping.target = pb::kUnassignedId;
   b.send(ping);
   REQUIRE(b.drain(frames, 4) == 1);
   CHECK(frames[0].sender == pb::kUnassignedId);
@@ -95,12 +95,13 @@ TEST_CASE("commands from other particles, to other ids or from itself are ignore
   Bench b;
   pb::Frame frames[4];
   b.drain(frames, 4);
+  // Addressed to its id, so that an answer would come at once (a broadcast's is delayed).
   pb::PingMessage ping;
-  ping.target = pb::kBroadcastId;
+  ping.target = pb::kUnassignedId;
   b.send(ping, 17);  // another particle
   ping.target = 9;   // another id
   b.send(ping);
-  ping.target = pb::kBroadcastId;
+  ping.target = pb::kUnassignedId;
   b.send(ping, pb::kUnassignedId);  // its own id
   CHECK(b.drain(frames, 4) == 0);
   pb::StopMessage stop;
@@ -160,7 +161,7 @@ TEST_CASE("a full transmit queue drops whole frames, never parts of one") {
   pb::Frame frames[8];
   b.drain(frames, 8);
   pb::PingMessage ping;
-  ping.target = pb::kBroadcastId;
+  ping.target = pb::kUnassignedId;
   for (int i = 0; i < 5; ++i) b.send(ping);
   // STATUS frames are 52 bytes: two fit in 128.
   CHECK(b.particle.tx_pending() == 104);
@@ -177,7 +178,7 @@ TEST_CASE("a frame cut short is dropped after 100 ms of silence and the next one
   for (size_t i = 0; i < sizeof partial; ++i) b.particle.on_rx_byte(partial[i], b.now);
   b.advance(150);
   pb::PingMessage ping;
-  ping.target = pb::kBroadcastId;
+  ping.target = pb::kUnassignedId;
   b.send(ping);
   REQUIRE(b.drain(frames, 4) >= 1);
   const pb::StatusMessage s = status_of(frames[0]);
@@ -222,4 +223,213 @@ TEST_CASE("SET_ID renames only the addressed particle and persists") {
   pb::Particle again(b.storage, 1, 5);
   again.begin(0);
   CHECK(again.id() == 12);
+}
+
+namespace {
+
+// Ticks the bench one millisecond at a time from its current time until the particle queues a
+// frame; returns how long that took (0: queued by a tick at the current time), or -1 after limit.
+int ms_until_tx(Bench &b, uint32_t limit) {
+  b.particle.tick(b.now);
+  for (uint32_t waited = 0; waited <= limit; ++waited) {
+    if (b.particle.tx_pending() > 0) return static_cast<int>(waited);
+    b.advance(1);
+  }
+  return -1;
+}
+
+// Periodic STATUS frames would be taken for answers: after the one due within the first
+// period from boot, the next comes 45 s or more later.
+void quieten(Bench &b) {
+  pb::SetParamMessage set;
+  set.target = pb::kUnassignedId;
+  set.param = static_cast<uint8_t>(pb::Param::STATUS_PERIOD_MS);
+  set.value = 60000;
+  b.send(set);
+  b.advance(2100);
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+}
+
+pb::PingMessage ping_to(uint8_t target) {
+  pb::PingMessage ping;
+  ping.target = target;
+  return ping;
+}
+
+// Bench b in round 0 of a method-D run whose readings come from `others` more particles, then
+// past the round's end, so the particle knows its group.
+void run_round_with(Bench &b, uint8_t others) {
+  pb::StartMessage start;
+  memset(&start, 0, sizeof start);
+  start.run_id = 4;
+  start.method = static_cast<uint8_t>(pb::Method::COUNTING);
+  start.cycle_steps = 10;
+  b.send(start);
+  for (uint8_t i = 0; i < others; ++i) {
+    pb::IntensityMessage m;
+    m.run_id = 4;
+    m.round = 0;
+    m.repeat = 0;
+    m.intensity = static_cast<uint16_t>(700 + i);
+    b.send(m, static_cast<uint8_t>(10 + i));
+  }
+  b.advance(3100);  // ROUND_MS 3000
+  REQUIRE(b.particle.coordinator().group_size() == others + 1);
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a broadcast PING is answered in a random 60 ms slot, one of 10 while no group is known") {
+  bool used[pb::Particle::kPingSlotsUnknown] = {};
+  for (uint32_t seed = 1; seed <= 60; ++seed) {
+    Bench b(seed * 7919u);
+    quieten(b);
+    pb::Frame frames[4];
+    b.send(ping_to(pb::kBroadcastId));
+    const int waited = ms_until_tx(b, 1000);
+    REQUIRE(waited >= 0);
+    CHECK(waited % 60 == 0);
+    CHECK(waited < 60 * pb::Particle::kPingSlotsUnknown);
+    used[waited / 60 % pb::Particle::kPingSlotsUnknown] = true;
+    REQUIRE(b.drain(frames, 4) == 1);
+    CHECK(frames[0].type == static_cast<uint8_t>(pb::MessageType::STATUS));
+  }
+  int slots = 0;
+  for (bool u : used) slots += u ? 1 : 0;
+  CHECK(slots >= 8);  // 60 draws spread over the ten slots
+}
+
+TEST_CASE("once a round has heard its group, a broadcast PING waits at most group - 1 slots") {
+  for (uint32_t seed = 1; seed <= 20; ++seed) {
+    Bench b(seed * 104729u);
+    quieten(b);
+    run_round_with(b, 2);  // a group of three
+    pb::Frame frames[8];
+    b.drain(frames, 8);
+    b.send(ping_to(pb::kBroadcastId));
+    const int waited = ms_until_tx(b, 1000);
+    REQUIRE(waited >= 0);
+    CHECK(waited % 60 == 0);
+    CHECK(waited <= 120);
+  }
+  Bench big(5);
+  quieten(big);
+  run_round_with(big, 30);  // a group of 31 still answers within a second
+  pb::Frame frames[8];
+  big.drain(frames, 8);
+  for (int i = 0; i < 20; ++i) {
+    big.send(ping_to(pb::kBroadcastId));
+    const int waited = ms_until_tx(big, 2000);
+    CHECK(waited >= 0);
+    CHECK(waited < 60 * pb::Particle::kPingSlotsMax);
+    big.drain(frames, 8);
+  }
+}
+
+TEST_CASE("a PING to its id while a broadcast answer waits is answered once, at once") {
+  Bench b(3);
+  quieten(b);
+  pb::Frame frames[4];
+  int tries = 0;
+  // A seed whose slot is not the first, so that the answer is still waiting.
+  do {
+    b.send(ping_to(pb::kBroadcastId));
+    b.particle.tick(b.now);
+    if (b.particle.tx_pending() == 0) break;
+    b.drain(frames, 4);
+  } while (++tries < 20);
+  REQUIRE(b.particle.tx_pending() == 0);
+  b.send(ping_to(pb::kBroadcastId));  // a repeat does not draw a second answer
+  b.send(ping_to(pb::kUnassignedId));
+  CHECK(b.drain(frames, 4) == 1);
+  b.advance(1000);
+  CHECK(b.drain(frames, 4) == 0);
+}
+
+TEST_CASE("take_tx hands out one frame at a time, however much room the caller has") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  b.send(ping_to(pb::kUnassignedId));
+  b.send(ping_to(pb::kUnassignedId));
+  pb::GetParamMessage get;
+  get.target = pb::kUnassignedId;
+  get.param = static_cast<uint8_t>(pb::Param::ROUND_MS);
+  b.send(get);
+  const size_t status_len = pb::StatusMessage::kPayloadSize + pb::kFrameOverhead;
+  const size_t value_len = pb::ParamValueMessage::kPayloadSize + pb::kFrameOverhead;
+  REQUIRE(b.particle.tx_pending() == 2 * status_len + value_len);
+  uint8_t out[256];
+  CHECK(!b.particle.tx_frame_open());
+  CHECK(b.particle.take_tx(out, sizeof out) == status_len);
+  CHECK(!b.particle.tx_frame_open());
+  // A frame taken in pieces: the last piece ends with the frame.
+  CHECK(b.particle.take_tx(out, 10) == 10);
+  CHECK(b.particle.tx_frame_open());
+  CHECK(out[0] == pb::kSync0);
+  CHECK(b.particle.take_tx(out, sizeof out) == status_len - 10);
+  CHECK(!b.particle.tx_frame_open());
+  CHECK(b.particle.take_tx(out, sizeof out) == value_len);
+  CHECK(out[3] == static_cast<uint8_t>(pb::MessageType::PARAM_VALUE));
+  CHECK(b.particle.take_tx(out, sizeof out) == 0);
+  CHECK(!b.particle.tx_frame_open());
+}
+
+TEST_CASE("ticked as main.cpp does, each 50 Hz frame carries the next step of the cycle") {
+  // Frames begin every 20 ms. main.cpp ticks at uneven instants and passes the next frame's
+  // start as servo_ms; a frame carries the pulse left by the last tick before it begins. START
+  // lands at each millisecond of a frame in turn: no step may repeat or be skipped.
+  const uint16_t steps = 10;
+  const uint32_t round_ms = 3000;  // ROUND_MS default
+  const int kFrames = 60;
+  for (uint32_t phase = 0; phase < 20; ++phase) {
+    RamStorage storage;
+    pb::Particle p(storage, 1, 1000 + phase);
+    p.begin(0);
+    const uint32_t start_ms = 1000 + phase;
+    const uint32_t cycle_ms = start_ms + round_ms;      // alone: S_n = 1, t_I = 0, t_p = 0
+    const uint32_t first_frame = (cycle_ms + 19) / 20;  // the first to begin at or after it
+    uint16_t latched[kFrames];
+    int seen = 0;
+    uint32_t rng = 12345 + phase;
+    uint32_t now = 0;
+    bool started = false;
+    while (seen < kFrames) {
+      rng = rng * 1103515245u + 12345u;
+      const uint32_t next = now + 1 + (rng >> 16) % 3;  // a pass every 1-3 ms
+      // Frames beginning before this pass carry what the previous pass left.
+      for (uint32_t f = now / 20 + 1; f * 20 <= next; ++f) {
+        if (f >= first_frame && seen < kFrames) latched[seen++] = p.servo_pulse_us();
+      }
+      now = next;
+      for (int k = 0; k < 8; ++k) p.on_adc_sample(p.next_sensor(), 600);
+      if (!started && now >= start_ms) {
+        pb::StartMessage m;
+        memset(&m, 0, sizeof m);
+        m.run_id = 1;
+        m.method = static_cast<uint8_t>(pb::Method::COUNTING);
+        m.cycle_steps = steps;
+        m.wave_size = 1;
+        uint8_t payload[pb::kMaxPayload];
+        uint8_t frame[pb::kMaxPayload + pb::kFrameOverhead];
+        const size_t len = pb::encode_frame(static_cast<uint8_t>(pb::MessageType::START), 0, 0,
+                                            payload, m.encode(payload), frame, sizeof frame);
+        for (size_t i = 0; i < len; ++i) p.on_rx_byte(frame[i], start_ms);
+        started = true;
+      }
+      p.tick(now, (now / 20 + 1) * 20);
+    }
+    uint16_t table[pb::kServoTablePoints];
+    p.settings().servo_table(table);
+    const pb::Geometry g = {static_cast<uint32_t>(p.settings().get(pb::Param::RADIUS_MIN_UM)),
+                            static_cast<uint32_t>(p.settings().get(pb::Param::RADIUS_MAX_UM))};
+    for (int f = 0; f < kFrames; ++f) {
+      const uint16_t k = static_cast<uint16_t>(f % steps);
+      CAPTURE(phase);
+      CAPTURE(f);
+      CHECK(latched[f] == pb::servo_pulse_us(pb::cycle_radius_um(k, steps, g), g, table));
+    }
+  }
 }

@@ -75,6 +75,9 @@ void Coordinator::start(const RunConfig &config, uint32_t now_ms, uint32_t radiu
 }
 
 void Coordinator::stop(uint32_t now_ms, uint32_t radius_now_um, const Geometry &g) {
+  // The console sends STOP in bursts. A copy that finds the particle already stopping or stopped
+  // changes nothing: restarting the ramp would only delay the body and the confirmation.
+  if (state() == State::STOPPING || state() == State::IDLE) return;
   state_ = state_byte(State::STOPPING);
   round_start_pending_ = false;
   motion_ = Motion::ramp(now_ms, radius_now_um, g);

@@ -68,7 +68,8 @@ class Coordinator {
   // wiggle or stop) first ramps down as after STOP. No kRoundStart is reported for round 0: the
   // owner prepares it right away, since readings for it may arrive before the next poll.
   void start(const RunConfig &config, uint32_t now_ms, uint32_t radius_now_um, const Geometry &g);
-  // From any state: smoothly back to R_min from radius_now_um (STOPPING), then IDLE.
+  // From any state: smoothly back to R_min from radius_now_um (STOPPING), then IDLE. Already
+  // STOPPING or IDLE: nothing changes (a repeated STOP does not restart the ramp).
   void stop(uint32_t now_ms, uint32_t radius_now_um, const Geometry &g);
   // IDLE only: three wiggles (IDENTIFYING), then IDLE. False in any other state.
   bool identify(uint32_t now_ms);

@@ -179,6 +179,27 @@ TEST_CASE("STOP ramps down from the current radius and then idles") {
   CHECK(c.motion().radius_um(5100, kPaper) == kPaper.r_min_um);
 }
 
+TEST_CASE("a repeated STOP neither restarts the ramp nor wakes an idle particle") {
+  pb::Rng rng_once(1), rng_twice(1);
+  pb::Coordinator once(rng_once), twice(rng_twice);
+  pb::Coordinator *const both[] = {&once, &twice};
+  for (pb::Coordinator *c : both) {
+    c->start(config(kCounting, 150, 1), 0, kPaper.r_min_um, kPaper);
+    run(*c, 0, 3000 + 1500, result(1, 1, 500));
+    c->stop(4500, c->motion().radius_um(4500, kPaper), kPaper);
+  }
+  // A later copy of the same STOP, 300 ms into the ramp.
+  twice.stop(4800, twice.motion().radius_um(4800, kPaper), kPaper);
+  CHECK(twice.state() == pb::State::STOPPING);
+  for (uint32_t t = 4800; t <= 5100; t += 20) {
+    CHECK(twice.motion().radius_um(t, kPaper) == once.motion().radius_um(t, kPaper));
+  }
+  run(twice, 4801, 5100, result(1, 1, 500));
+  CHECK(twice.state() == pb::State::IDLE);
+  twice.stop(5200, kPaper.r_min_um, kPaper);
+  CHECK(twice.state() == pb::State::IDLE);
+}
+
 TEST_CASE("IDENTIFY wiggles only an idle particle") {
   pb::Rng rng(1);
   pb::Coordinator c(rng);

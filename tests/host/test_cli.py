@@ -10,7 +10,7 @@ import pytest
 
 from particlebot.cli import main
 from particlebot.commands._common import open_station
-from particlebot.commands.demo import DemoScript, Phase
+from particlebot.commands.demo import DemoResult, DemoScript, Phase, unresolved_neighbours
 from particlebot.console.app import ConsoleApp
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
@@ -100,3 +100,27 @@ def test_the_radio_help_names_every_kind_of_radio(
     text = " ".join(capsys.readouterr().out.split())
     for example in ("serial://", "xbee://", "virtual://10", "emulated://5"):
         assert example in text
+
+
+def _result(particle_id: int, rank: int, s_n: int, intensity: int) -> DemoResult:
+    return DemoResult(
+        particle_id=particle_id,
+        start_distance=0.155 * rank,
+        end_distance=0.155 * rank,
+        rank=rank,
+        s_n=s_n,
+        state="IDLE",
+        intensity=intensity,
+    )
+
+
+def test_a_mismatch_from_readings_within_the_counting_tolerance_is_explained() -> None:
+    results = [_result(1, 1, 1, 900), _result(2, 2, 2, 171), _result(3, 3, 2, 165)]
+    lines = unresolved_neighbours(results)
+    assert len(lines) == 1
+    assert "particles 2 and 3 read 171 and 165" in lines[0]
+
+
+def test_neighbours_whose_readings_differ_enough_are_not_blamed() -> None:
+    results = [_result(1, 1, 1, 900), _result(2, 2, 2, 700), _result(3, 3, 3, 650)]
+    assert unresolved_neighbours(results) == []

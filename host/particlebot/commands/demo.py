@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import enum
+import itertools
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,7 +13,7 @@ from particlebot.commands._common import fail, run_headless, station
 from particlebot.commands.plot import write_plot
 from particlebot.console.app import ConsoleApp
 from particlebot.console.model import Campaign, ConsoleModel, state_name
-from particlebot.protocol import Method, State
+from particlebot.protocol import PARAM_SPECS, Method, Param, State
 from particlebot.radio import RadioError
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.virtual.swarm import ParticleSnapshot, SwarmConfig, VirtualSwarm
@@ -34,6 +35,7 @@ class DemoResult:
     rank: int
     s_n: int | None
     state: str
+    intensity: int | None = None
 
     @property
     def ok(self) -> bool:
@@ -131,6 +133,7 @@ class DemoScript:
                     rank=rank,
                     s_n=self.s_n.get(particle.id),
                     state=state,
+                    intensity=row.status.intensity if row and row.status else None,
                 )
             )
         return results
@@ -159,7 +162,29 @@ def summary(script: DemoScript) -> str:
         lines.append(f"FAILED: {script.failure}")
     verdict = "every S_n equals the particle's rank by distance to the lamp"
     lines.append(verdict if script.all_ranks_match() else "S_n does NOT match the ranks")
+    if not script.all_ranks_match():
+        lines.extend(unresolved_neighbours(script.results()))
     return "\n".join(lines)
+
+
+def unresolved_neighbours(results: list[DemoResult]) -> list[str]:
+    """Explains mismatches that are method D's resolution limit rather than a fault.
+
+    Method D counts readings within COUNT_TOLERANCE of each other as one level, so two neighbours
+    far from the lamp, whose readings differ less than that, share an S_n.
+    """
+    tolerance = PARAM_SPECS[Param.COUNT_TOLERANCE].default
+    lines = []
+    for near, far in itertools.pairwise(results):
+        if near.intensity is None or far.intensity is None:
+            continue
+        if abs(near.intensity - far.intensity) <= tolerance:
+            lines.append(
+                f"particles {near.particle_id} and {far.particle_id} read {near.intensity} and "
+                f"{far.intensity}, within +-{tolerance} (COUNT_TOLERANCE): method D counts them "
+                "as one level; the light field cannot rank them"
+            )
+    return lines
 
 
 def run(args: argparse.Namespace) -> int:

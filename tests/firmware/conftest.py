@@ -11,7 +11,6 @@ import pytest
 from particlebot.firmware.native import NativeParticle
 from particlebot.protocol import (
     BASE_STATION_ID,
-    BROADCAST_ID,
     Frame,
     Message,
     Param,
@@ -107,9 +106,11 @@ class Bench:
         """(time collected, message) of every frame of that kind seen so far."""
         return [(t, f.message) for t, f in self.frames if isinstance(f.message, kind)]
 
-    def set_param(self, param: Param, value: int, target: int = BROADCAST_ID) -> ParamValue:
+    def set_param(self, param: Param, value: int, target: int | None = None) -> ParamValue:
+        """SET_PARAM addressed to the particle's own id (answered at once, not in a reply slot)."""
         self.collect()
-        self.send(SetParam(target=target, param=param, value=value))
+        own = self.particle.id if target is None else target
+        self.send(SetParam(target=own, param=param, value=value))
         replies = [f.message for f in self.collect() if isinstance(f.message, ParamValue)]
         assert len(replies) == 1, replies
         return replies[0]

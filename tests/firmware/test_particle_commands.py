@@ -53,7 +53,7 @@ def test_a_blank_eeprom_gives_the_unassigned_id_and_default_parameters(bench: Be
     assert status.definition_hash == DEFINITION_HASH
     for param, spec in PARAM_SPECS.items():
         bench.collect()
-        bench.send(GetParam(target=BROADCAST_ID, param=param))
+        bench.send(GetParam(target=bench.particle.id, param=param))
         (reply,) = [f.message for f in bench.collect() if isinstance(f.message, ParamValue)]
         assert (reply.param, reply.result, reply.value) == (param, ParamResult.OK, spec.default)
 
@@ -94,7 +94,7 @@ def test_set_param_reports_unknown_out_of_range_and_busy(bench: Bench) -> None:
     low = PARAM_SPECS[Param.CYCLE_STEPS].min - 1
     refused = bench.set_param(Param.CYCLE_STEPS, low)
     assert (refused.result, refused.value) == (ParamResult.OUT_OF_RANGE, 10)
-    bench.send(GetParam(target=BROADCAST_ID, param=99))
+    bench.send(GetParam(target=bench.particle.id, param=99))
     (reply,) = [f.message for f in bench.collect() if isinstance(f.message, ParamValue)]
     assert reply.result == ParamResult.UNKNOWN_PARAM
     bench.send(
@@ -152,7 +152,7 @@ def test_a_broadcast_ping_is_answered_in_a_random_60_ms_slot(bench: Bench) -> No
 
 def test_identify_wiggles_an_idle_particle_three_times_then_idles(bench: Bench) -> None:
     bench.collect()
-    bench.send(Identify(target=BROADCAST_ID))
+    bench.send(Identify(target=bench.particle.id))
     assert statuses(bench.collect())[0].state == State.IDENTIFYING
     trace: list[int] = []
     bench.advance(1600, each=lambda t: trace.append(bench.particle.radius_um))
@@ -168,7 +168,7 @@ def test_identify_does_not_move_a_running_particle(bench: Bench) -> None:
         Start(run_id=1, method=3, cycle_steps=0, wave_size=0, update_interval_s=0, phototaxis=0)
     )
     bench.collect()
-    bench.send(Identify(target=BROADCAST_ID))
+    bench.send(Identify(target=bench.particle.id))
     (status,) = statuses(bench.collect())
     assert status.state == State.ESTIMATING
 

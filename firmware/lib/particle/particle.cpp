@@ -27,6 +27,8 @@ Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
       last_rx_ms_(0),
       next_status_ms_(0),
       ping_reply_ms_(0),
+      param_reply_ms_(0),
+      param_reply_value_(0),
       radius_um_(0),
       pulse_us_(0),
       servo_start_ms_(0),
@@ -43,6 +45,9 @@ Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
       reset_cause_(reset_cause),
       rx_idle_pending_(false),
       ping_reply_pending_(false),
+      param_reply_pending_(false),
+      param_reply_param_(0),
+      param_reply_result_(0),
       readings_awaited_(0) {
   geometry_.r_min_um = 0;
   geometry_.r_max_um = 0;
@@ -96,6 +101,7 @@ void Particle::tick(uint32_t now_ms, uint32_t servo_ms) {
     schedule_status(now_ms);
   }
   if (ping_reply_pending_ && time_reached(now_ms, ping_reply_ms_)) send_status();
+  if (param_reply_pending_ && time_reached(now_ms, param_reply_ms_)) send_param_reply();
 }
 
 size_t Particle::take_tx(uint8_t *out, size_t capacity) {
@@ -175,7 +181,9 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
     case MessageType::SET_PARAM: {
       SetParamMessage m;
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
-        handle_set_param(m.param, m.value);
+        int32_t in_force = 0;
+        const ParamResult result = apply_param(m.param, m.value, &in_force);
+        reply_param(m.target, m.param, result, in_force, now_ms);
       }
       break;
     }
@@ -184,7 +192,8 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
         int32_t value = 0;
         const bool known = settings_.get(m.param, &value);
-        send_param_value(m.param, known ? ParamResult::OK : ParamResult::UNKNOWN_PARAM, value);
+        reply_param(m.target, m.param, known ? ParamResult::OK : ParamResult::UNKNOWN_PARAM, value,
+                    now_ms);
       }
       break;
     }
@@ -202,7 +211,11 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
       IdentifyMessage m;
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
         coordinator_.identify(now_ms);
-        send_status();
+        if (m.target == kBroadcastId) {
+          schedule_ping_reply(now_ms);
+        } else {
+          send_status();
+        }
       }
       break;
     }
@@ -251,23 +264,17 @@ void Particle::handle_start(const StartMessage &m, uint32_t now_ms) {
   update_servo(now_ms);
 }
 
-void Particle::handle_set_param(uint8_t param, int32_t value) {
-  int32_t current = 0;
-  if (!settings_.get(param, &current)) {
-    send_param_value(param, ParamResult::UNKNOWN_PARAM, 0);
-    return;
-  }
+ParamResult Particle::apply_param(uint8_t param, int32_t value, int32_t *in_force) {
+  *in_force = 0;
+  if (!settings_.get(param, in_force)) return ParamResult::UNKNOWN_PARAM;
   // Parameters shape the running schedule and the body's stroke: only change them at rest.
   const State s = coordinator_.state();
-  if (s != State::IDLE && s != State::DONE) {
-    send_param_value(param, ParamResult::BUSY, current);
-    return;
-  }
+  if (s != State::IDLE && s != State::DONE) return ParamResult::BUSY;
   const ParamResult result = settings_.set(param, value);
-  if (result == ParamResult::OK) current = value;
+  if (result == ParamResult::OK) *in_force = value;
   refresh_geometry();
   update_servo(now_ms_, true);
-  send_param_value(param, result, current);
+  return result;
 }
 
 void Particle::handle_intensity(uint8_t sender, const IntensityMessage &m) {
@@ -381,31 +388,51 @@ void Particle::send_intensity() {
   send(MessageType::INTENSITY, payload, m.encode(payload));
 }
 
-void Particle::send_param_value(uint8_t param, ParamResult result, int32_t value) {
-  ParamValueMessage m;
-  m.param = param;
-  m.result = static_cast<uint8_t>(result);
-  m.value = value;
-  uint8_t payload[ParamValueMessage::kPayloadSize];
-  send(MessageType::PARAM_VALUE, payload, m.encode(payload));
-}
-
 void Particle::schedule_status(uint32_t now_ms) {
   // +-25 % jitter: particles that started together drift apart instead of colliding every time.
   const uint32_t period = static_cast<uint32_t>(settings_.get(Param::STATUS_PERIOD_MS));
   next_status_ms_ = now_ms + period * (75u + rng_.below(51)) / 100u;
 }
 
-void Particle::schedule_ping_reply(uint32_t now_ms) {
-  // A repeated broadcast PING keeps the slot already drawn: the answer is on its way.
-  if (ping_reply_pending_) return;
+uint32_t Particle::reply_slot_ms(uint32_t now_ms) {
   // A group of one tells nothing: method A never listens, and a particle that heard nobody may
   // still share the base station with others.
   uint8_t slots = coordinator_.group_size();
   if (slots <= 1) slots = kPingSlotsUnknown;
   if (slots > kPingSlotsMax) slots = kPingSlotsMax;
-  ping_reply_ms_ = now_ms + static_cast<uint32_t>(rng_.below(slots)) * kPingSlotMs;
+  return now_ms + static_cast<uint32_t>(rng_.below(slots)) * kPingSlotMs;
+}
+
+void Particle::schedule_ping_reply(uint32_t now_ms) {
+  // A repeated broadcast PING keeps the slot already drawn: the answer is on its way.
+  if (ping_reply_pending_) return;
+  ping_reply_ms_ = reply_slot_ms(now_ms);
   ping_reply_pending_ = true;
+}
+
+void Particle::reply_param(uint8_t target, uint8_t param, ParamResult result, int32_t value,
+                           uint32_t now_ms) {
+  // One reply can wait at a time: an earlier one still waiting goes out now rather than be lost.
+  if (param_reply_pending_) send_param_reply();
+  param_reply_param_ = param;
+  param_reply_result_ = static_cast<uint8_t>(result);
+  param_reply_value_ = value;
+  param_reply_pending_ = true;
+  if (target == kBroadcastId) {
+    param_reply_ms_ = reply_slot_ms(now_ms);
+  } else {
+    send_param_reply();
+  }
+}
+
+void Particle::send_param_reply() {
+  param_reply_pending_ = false;
+  ParamValueMessage m;
+  m.param = param_reply_param_;
+  m.result = param_reply_result_;
+  m.value = param_reply_value_;
+  uint8_t payload[ParamValueMessage::kPayloadSize];
+  send(MessageType::PARAM_VALUE, payload, m.encode(payload));
 }
 
 }  // namespace pb

@@ -22,10 +22,11 @@ class Particle {
  public:
   // Bytes of radio output that can wait for Serial1; a frame that does not fit is dropped whole.
   static const uint8_t kTxCapacity = 128;
-  // A broadcast PING is answered in a random one of this many slots once a round has told the
-  // group size (kPingSlotsUnknown before): a swarm answering at once would overflow the base
-  // station's 9600-baud radio. A slot holds one STATUS frame on the air (52 B: 54 ms at 9600),
-  // and at most kPingSlotsMax slots keep every answer within a second.
+  // A broadcast request that draws a reply (PING, IDENTIFY, SET_PARAM, GET_PARAM) is answered in
+  // a random one of this many slots once a round has told the group size (kPingSlotsUnknown
+  // before): a swarm answering at once would overflow the base station's 9600-baud radio. A slot
+  // holds one STATUS frame on the air (52 B: 54 ms at 9600), and at most kPingSlotsMax slots keep
+  // every answer within a second.
   static const uint16_t kPingSlotMs = 60;
   static const uint8_t kPingSlotsUnknown = 10;
   static const uint8_t kPingSlotsMax = 16;
@@ -79,7 +80,7 @@ class Particle {
  private:
   void handle_frame(const Frame &frame, uint32_t now_ms);
   void handle_start(const StartMessage &m, uint32_t now_ms);
-  void handle_set_param(uint8_t param, int32_t value);
+  ParamResult apply_param(uint8_t param, int32_t value, int32_t *in_force);
   void handle_intensity(uint8_t sender, const IntensityMessage &m);
   void begin_round_record(uint16_t round);
   void finish_round();
@@ -89,7 +90,13 @@ class Particle {
   void send(MessageType type, const uint8_t *payload, uint8_t len);
   void send_status();
   void send_intensity();
-  void send_param_value(uint8_t param, ParamResult result, int32_t value);
+  // Sends PARAM_VALUE now, or in a reply slot when the request was broadcast.
+  void reply_param(uint8_t target, uint8_t param, ParamResult result, int32_t value,
+                   uint32_t now_ms);
+  void send_param_reply();  // the one place PARAM_VALUE is encoded
+  // When a reply to a broadcast request is due. Kept out of line: both reply paths call it, and
+  // inlined twice it costs about 100 B of flash.
+  __attribute__((noinline)) uint32_t reply_slot_ms(uint32_t now_ms);
   void schedule_status(uint32_t now_ms);
   void schedule_ping_reply(uint32_t now_ms);
   bool addressed_to_me(uint8_t target) const;
@@ -106,7 +113,9 @@ class Particle {
   uint32_t boot_ms_;
   uint32_t last_rx_ms_;
   uint32_t next_status_ms_;
-  uint32_t ping_reply_ms_;  // when the pending answer to a broadcast PING is due
+  uint32_t ping_reply_ms_;   // when the pending STATUS answering a broadcast request is due
+  uint32_t param_reply_ms_;  // when the pending PARAM_VALUE is due
+  int32_t param_reply_value_;
   uint32_t radius_um_;
   uint16_t pulse_us_;
   uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
@@ -121,8 +130,11 @@ class Particle {
   uint8_t record_run_;
   uint8_t seq_;
   uint8_t reset_cause_;
-  bool rx_idle_pending_;     // bytes arrived since the last parser timeout
-  bool ping_reply_pending_;  // a broadcast PING awaits its STATUS
+  bool rx_idle_pending_;      // bytes arrived since the last parser timeout
+  bool ping_reply_pending_;   // a broadcast PING or IDENTIFY awaits its STATUS
+  bool param_reply_pending_;  // a broadcast SET_PARAM or GET_PARAM awaits its PARAM_VALUE
+  uint8_t param_reply_param_;
+  uint8_t param_reply_result_;
   // Readings still to complete before the round's own: 2 when a round starts mid-reading (that
   // reading mixes in light from before the round), 1 otherwise, 0 once round_intensity_ is set.
   uint8_t readings_awaited_;

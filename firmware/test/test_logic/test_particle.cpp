@@ -122,7 +122,7 @@ TEST_CASE("SET_PARAM is refused while running and applied at rest, GET_PARAM rea
   pb::Frame frames[4];
   b.drain(frames, 4);
   pb::SetParamMessage set;
-  set.target = pb::kBroadcastId;
+  set.target = pb::kUnassignedId;  // its own id: answered at once
   set.param = static_cast<uint8_t>(pb::Param::CYCLE_STEPS);
   set.value = 75;
   pb::StartMessage start;
@@ -326,6 +326,75 @@ TEST_CASE("once a round has heard its group, a broadcast PING waits at most grou
     CHECK(waited < 60 * pb::Particle::kPingSlotsMax);
     big.drain(frames, 8);
   }
+}
+
+TEST_CASE("broadcast SET_PARAM, GET_PARAM and IDENTIFY are answered in a reply slot") {
+  bool waited_somewhere = false;
+  for (uint32_t seed = 1; seed <= 20; ++seed) {
+    Bench b(seed * 7919u);
+    quieten(b);
+    pb::Frame frames[4];
+    pb::SetParamMessage set;
+    set.target = pb::kBroadcastId;
+    set.param = static_cast<uint8_t>(pb::Param::CYCLE_STEPS);
+    set.value = 75;
+    b.send(set);
+    int waited = ms_until_tx(b, 1000);
+    REQUIRE(waited >= 0);
+    CHECK(waited % 60 == 0);
+    CHECK(waited < 60 * pb::Particle::kPingSlotsUnknown);
+    waited_somewhere = waited_somewhere || waited > 0;
+    REQUIRE(b.drain(frames, 4) == 1);
+    pb::ParamValueMessage reply;
+    REQUIRE(reply.decode(frames[0].payload, frames[0].length));
+    CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::OK));
+    CHECK(reply.value == 75);
+
+    pb::GetParamMessage get;
+    get.target = pb::kBroadcastId;
+    get.param = set.param;
+    b.send(get);
+    REQUIRE(ms_until_tx(b, 1000) >= 0);
+    REQUIRE(b.drain(frames, 4) == 1);
+    CHECK(frames[0].type == static_cast<uint8_t>(pb::MessageType::PARAM_VALUE));
+
+    pb::IdentifyMessage identify;
+    identify.target = pb::kBroadcastId;
+    b.send(identify);
+    CHECK(b.particle.state() == pb::State::IDENTIFYING);  // the wiggle itself starts at once
+    REQUIRE(ms_until_tx(b, 1000) >= 0);
+    REQUIRE(b.drain(frames, 4) == 1);
+    CHECK(frames[0].type == static_cast<uint8_t>(pb::MessageType::STATUS));
+  }
+  CHECK(waited_somewhere);  // the replies really were spread out, not all sent at once
+}
+
+TEST_CASE("a second broadcast parameter request sends the reply still waiting at once") {
+  Bench b(11);
+  quieten(b);
+  pb::Frame frames[4];
+  pb::GetParamMessage get;
+  get.target = pb::kBroadcastId;
+  get.param = static_cast<uint8_t>(pb::Param::CYCLE_STEPS);
+  int tries = 0;
+  // Find a draw whose reply has to wait, then ask again before it is due.
+  do {
+    b.send(get);
+    b.particle.tick(b.now);
+    if (b.particle.tx_pending() == 0) break;
+    b.drain(frames, 4);
+  } while (++tries < 20);
+  REQUIRE(b.particle.tx_pending() == 0);
+  get.param = static_cast<uint8_t>(pb::Param::ROUND_MS);
+  b.send(get);
+  REQUIRE(b.drain(frames, 4) == 1);  // the first reply, not lost
+  pb::ParamValueMessage reply;
+  REQUIRE(reply.decode(frames[0].payload, frames[0].length));
+  CHECK(reply.param == static_cast<uint8_t>(pb::Param::CYCLE_STEPS));
+  REQUIRE(ms_until_tx(b, 1000) >= 0);
+  REQUIRE(b.drain(frames, 4) == 1);
+  REQUIRE(reply.decode(frames[0].payload, frames[0].length));
+  CHECK(reply.param == static_cast<uint8_t>(pb::Param::ROUND_MS));
 }
 
 TEST_CASE("a PING to its id while a broadcast answer waits is answered once, at once") {

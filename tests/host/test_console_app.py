@@ -74,6 +74,18 @@ def test_every_particle_heard_appears_in_the_table_with_its_s_n() -> None:
     run_app(test)
 
 
+def test_the_table_lists_particles_by_id_whatever_order_they_are_heard_in() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        for particle in (12, 3, 7):
+            radio.inject(status_frame(particle, state=int(State.IDLE)))
+            assert wait_until(lambda: particle in {row.id for row in app.model.rows()})  # noqa: B023
+            await refreshed(pilot)  # each one is added to the table on its own
+        assert [row[0] for row in table_text(app)] == ["3", "7", "12"]
+
+    run_app(test)
+
+
 def test_a_foreign_firmware_hash_is_flagged_in_the_table() -> None:
     async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
         app = console(pilot)

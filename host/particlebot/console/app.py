@@ -41,6 +41,11 @@ WELCOME = (
 )
 
 
+def _id_order(cell: Text) -> int:
+    """Sort key of an ID cell: its number (every id fits a byte)."""
+    return int(cell.plain) if cell.plain.isdigit() else 256
+
+
 def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Text]:
     """The table cells of one particle, flags styled so they stand out."""
     status = row.status
@@ -174,14 +179,19 @@ class ConsoleApp(App[int]):
             )
         )
         table = self.query_one("#table", DataTable)
+        added = False
         for row in model.rows():
             cells = row_cells(row, now, model)
             if row.key not in self._rows:
                 table.add_row(*(cells[key] for key, _ in COLUMNS), key=row.key)
                 self._rows.add(row.key)
+                added = True
             else:
                 for key, _ in COLUMNS:
                     table.update_cell(row.key, key, cells[key], update_width=True)
+        if added:
+            # Particles are heard in any order; a person looks them up by id.
+            table.sort("id", key=_id_order)
         log = self.query_one("#messages", RichLog)
         for note in model.new_notes():
             style = {"error": "bold red", "warning": "yellow"}.get(note.level, "")

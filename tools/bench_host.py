@@ -7,6 +7,7 @@ import argparse
 import queue
 import statistics
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Self
@@ -46,11 +47,13 @@ class _Counter(Listener):
         self.count = 0
         self.target = target
         self.done_at = 0.0
+        self.done = threading.Event()
 
     def on_frame(self, received: ReceivedFrame) -> None:
         self.count += 1
         if self.count == self.target:
             self.done_at = time.perf_counter()
+            self.done.set()
 
 
 def status_packets(count: int, senders: int = 10) -> list[Packet]:
@@ -80,8 +83,8 @@ def receive_path(count: int, log_dir: Path) -> float:
         start = time.perf_counter()
         for packet in packets:
             radio.packets.put(packet)
-        while counter.count < count:
-            time.sleep(0.005)
+        if not counter.done.wait(timeout=120):
+            raise RuntimeError(f"only {counter.count} of {count} frames came through")
     return count / (counter.done_at - start)
 
 

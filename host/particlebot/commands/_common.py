@@ -13,7 +13,7 @@ from types import FrameType
 
 from particlebot.console.model import ConsoleModel
 from particlebot.logs.jsonl import JsonlWriter, default_log_path
-from particlebot.radio import Radio, RadioError, open_radio
+from particlebot.radio import Radio, open_radio
 from particlebot.session import Session
 
 
@@ -98,7 +98,3 @@ def run_headless(
             report()
             next_report = time.monotonic() + report_every_s
         time.sleep(0.05)
-
-
-def radio_error(exc: RadioError) -> int:
-    return fail(str(exc))

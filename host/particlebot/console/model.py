@@ -289,13 +289,6 @@ class ConsoleModel(Listener):
             self.notes_written = 0
             return list(self.notes)[total - count :]
 
-    def active(self, name: str) -> Campaign | None:
-        with self._lock:
-            for campaign in self.campaigns:
-                if campaign.name == name and not campaign.done:
-                    return campaign
-        return None
-
     def last(self, name: str) -> Campaign | None:
         with self._lock:
             for campaign in reversed(self.campaigns):

@@ -9,9 +9,9 @@ library is built once with `make native`.
 from __future__ import annotations
 
 import ctypes
+import logging
 import os
 import subprocess
-import sys
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -25,6 +25,8 @@ SENSOR_COUNT = 6
 EEPROM_SIZE = 1024
 _STATUS_CAPACITY = 64
 _TX_CHUNK = 4096
+
+_log = logging.getLogger(__name__)
 
 ENV_VAR = "PARTICLEBOT_NATIVE_LIB"
 _REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -96,10 +98,8 @@ def _declare(lib: ctypes.CDLL) -> None:
 
 
 def _build_once(root: Path) -> None:
-    print(
-        f"particlebot: building the native firmware library (make -C {root} native)...",
-        file=sys.stderr,
-    )
+    # A warning, so that it shows without any logging set up: the build takes a while.
+    _log.warning("building the native firmware library (make -C %s native)...", root)
     result = subprocess.run(
         ["make", "-C", str(root), "native"], capture_output=True, text=True, check=False
     )

@@ -240,11 +240,6 @@ class Medium:
             arrival = heapq.heappop(self._base_arrivals)
             self.deliver(BASE, arrival.source, arrival.data, arrival.cycle)
 
-    def line_free(self, receiver: int) -> int:
-        """When receiver's serial line will have delivered everything queued so far."""
-        radio = self._radios[receiver]
-        return -(-radio.line_free_scaled // radio.baud)
-
     def forget(self) -> None:
         """Drops the packet and reception history (long runs keep memory bounded)."""
         self.packets.clear()

@@ -2,6 +2,7 @@
 #include "estimation.h"
 
 #include "protocol_gen.h"
+#include "settings.h"
 
 namespace pb {
 
@@ -12,13 +13,6 @@ const uint8_t kMaxIndex = 255;
 
 uint8_t saturate_index(uint32_t zero_based) {
   return zero_based >= kMaxIndex ? kMaxIndex : static_cast<uint8_t>(zero_based + 1);
-}
-
-int32_t clamp_param(Param param, int32_t value) {
-  ParamSpec spec;
-  param_spec(static_cast<uint8_t>(param), &spec);
-  if (value < spec.min) return spec.min;
-  return value > spec.max ? spec.max : value;
 }
 
 // floor(sqrt(x)), bit by bit: no float library on the AVR.
@@ -45,7 +39,7 @@ __attribute__((noinline)) uint32_t wide_quotient(uint32_t a, uint32_t b, uint32_
 // N_w: the GROUPS parameter, or one group per particle in {own} + others. Capped so every
 // product below fits 32 bits; a group that large saturates S_n anyway.
 uint32_t group_count(size_t count, int32_t groups) {
-  if (groups > 0) return static_cast<uint32_t>(clamp_param(Param::GROUPS, groups));
+  if (groups > 0) return static_cast<uint32_t>(clamp_to_spec(Param::GROUPS, groups));
   const uint32_t cap = 0xFFFFu;
   return count >= cap ? cap : static_cast<uint32_t>(count) + 1;
 }
@@ -76,11 +70,11 @@ uint32_t root_resistance(uint16_t v) {
 uint8_t estimate_direct(uint16_t own, const EstimationParams &p) {
   if (own == 0) return kMaxIndex;
   if (own >= kFullScale) return 1;
-  const uint32_t v_x = static_cast<uint32_t>(clamp_param(Param::REF_VALUE, p.ref_value));
+  const uint32_t v_x = static_cast<uint32_t>(clamp_to_spec(Param::REF_VALUE, p.ref_value));
   if (own >= v_x) return 1;
   const uint32_t r_x =
-      static_cast<uint32_t>(clamp_param(Param::REF_DISTANCE_MM, p.ref_distance_mm));
-  const uint32_t d = static_cast<uint32_t>(clamp_param(Param::DIAMETER_MM, p.diameter_mm));
+      static_cast<uint32_t>(clamp_to_spec(Param::REF_DISTANCE_MM, p.ref_distance_mm));
+  const uint32_t d = static_cast<uint32_t>(clamp_to_spec(Param::DIAMETER_MM, p.diameter_mm));
   // Eqs. 14-15: D_n^2 = r_n^2 - r_x^2 = r_x^2 * 1023 (V_x - V_n) / (V_n (1023 - V_x)). With
   // q = floor(4 D_n^2 / D^2) and z = floor(sqrt(q)) = floor(2 D_n / D), eq. 16 rounded half up is
   // round(D_n / D) = (z + 1) / 2 exactly, in integers (both sides fit 64 bits).
@@ -121,7 +115,7 @@ uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count, i
 
 uint8_t estimate_counting(uint16_t own, const uint16_t *others, size_t count, int32_t tolerance) {
   if (others == NULL) return 1;
-  const uint32_t tol = static_cast<uint32_t>(clamp_param(Param::COUNT_TOLERANCE, tolerance));
+  const uint32_t tol = static_cast<uint32_t>(clamp_to_spec(Param::COUNT_TOLERANCE, tolerance));
   uint32_t levels = 0;
   uint16_t last = 0;
   bool have_last = false;

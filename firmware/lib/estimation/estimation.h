@@ -55,7 +55,6 @@ class IntensityRecord {
   bool add(uint8_t sender, uint16_t reading);
   uint8_t count() const { return count_; }
   const uint16_t *readings() const { return readings_; }
-  uint8_t sender(uint8_t i) const { return i < count_ ? senders_[i] : 0; }
 
  private:
   uint16_t readings_[kCapacity];

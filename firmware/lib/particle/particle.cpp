@@ -3,21 +3,6 @@
 
 namespace pb {
 
-namespace {
-
-uint8_t param_id(Param p) {
-  return static_cast<uint8_t>(p);
-}
-
-int32_t clamp_to_spec(Param p, int32_t value) {
-  ParamSpec spec;
-  if (!param_spec(param_id(p), &spec)) return value;
-  if (value < spec.min) return spec.min;
-  return value > spec.max ? spec.max : value;
-}
-
-}  // namespace
-
 Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
     : settings_(storage),
       rng_(rng_seed),
@@ -199,11 +184,8 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
     }
     case MessageType::PING: {
       PingMessage m;
-      if (!m.decode(frame.payload, frame.length) || !addressed_to_me(m.target)) break;
-      if (m.target == kBroadcastId) {
-        schedule_ping_reply(now_ms);
-      } else {
-        send_status();
+      if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
+        answer_with_status(m.target, now_ms);
       }
       break;
     }
@@ -211,11 +193,7 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
       IdentifyMessage m;
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
         coordinator_.identify(now_ms);
-        if (m.target == kBroadcastId) {
-          schedule_ping_reply(now_ms);
-        } else {
-          send_status();
-        }
+        answer_with_status(m.target, now_ms);
       }
       break;
     }
@@ -256,7 +234,8 @@ void Particle::handle_start(const StartMessage &m, uint32_t now_ms) {
   c.round_ms = static_cast<uint32_t>(settings_.get(Param::ROUND_MS));
   coordinator_.start(c, now_ms, radius_at(now_ms), geometry_);
   // Readings for round 0 may follow in the same burst as START, before the next tick, so the
-  // round's bookkeeping starts here rather than at the next poll.
+  // round's bookkeeping starts here rather than at the next poll. The record is emptied even
+  // when it names this run: a run stopped earlier may have used the same id.
   record_.clear();
   record_run_ = m.run_id;
   record_round_ = 0;
@@ -287,20 +266,19 @@ void Particle::handle_intensity(uint8_t sender, const IntensityMessage &m) {
   const bool next = (s == State::WAITING || s == State::CYCLING || s == State::PAUSED) &&
                     m.round == static_cast<uint16_t>(round + 1);
   if (!current && !next) return;
-  if (record_run_ != m.run_id || record_round_ != m.round) {
-    record_.clear();
-    record_run_ = m.run_id;
-    record_round_ = m.round;
-  }
+  use_record(m.run_id, m.round);
   record_.add(sender, m.intensity);
 }
 
+void Particle::use_record(uint8_t run_id, uint16_t round) {
+  if (record_run_ == run_id && record_round_ == round) return;
+  record_.clear();
+  record_run_ = run_id;
+  record_round_ = round;
+}
+
 void Particle::begin_round_record(uint16_t round) {
-  if (record_run_ != coordinator_.run_id() || record_round_ != round) {
-    record_.clear();
-    record_run_ = coordinator_.run_id();
-    record_round_ = round;
-  }
+  use_record(coordinator_.run_id(), round);
   readings_awaited_ = sampler_.between_readings() ? 1 : 2;
 }
 
@@ -348,7 +326,7 @@ void Particle::update_servo(uint32_t now_ms, bool table_changed) {
   const uint32_t r = m.radius_um(now_ms, geometry_);
   if (r == radius_um_ && !table_changed) return;
   radius_um_ = r;
-  uint16_t table[kServoTablePoints];
+  uint16_t table[kServoCalPoints];
   settings_.servo_table(table);
   pulse_us_ = pb::servo_pulse_us(r, geometry_, table);
 }
@@ -403,7 +381,11 @@ uint32_t Particle::reply_slot_ms(uint32_t now_ms) {
   return now_ms + static_cast<uint32_t>(rng_.below(slots)) * kPingSlotMs;
 }
 
-void Particle::schedule_ping_reply(uint32_t now_ms) {
+void Particle::answer_with_status(uint8_t target, uint32_t now_ms) {
+  if (target != kBroadcastId) {
+    send_status();
+    return;
+  }
   // A repeated broadcast PING keeps the slot already drawn: the answer is on its way.
   if (ping_reply_pending_) return;
   ping_reply_ms_ = reply_slot_ms(now_ms);

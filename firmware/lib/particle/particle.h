@@ -82,6 +82,8 @@ class Particle {
   void handle_start(const StartMessage &m, uint32_t now_ms);
   ParamResult apply_param(uint8_t param, int32_t value, int32_t *in_force);
   void handle_intensity(uint8_t sender, const IntensityMessage &m);
+  // Points record_ at that round of that run, emptying it unless it already holds that round.
+  void use_record(uint8_t run_id, uint16_t round);
   void begin_round_record(uint16_t round);
   void finish_round();
   void refresh_geometry();
@@ -98,7 +100,8 @@ class Particle {
   // inlined twice it costs about 100 B of flash.
   __attribute__((noinline)) uint32_t reply_slot_ms(uint32_t now_ms);
   void schedule_status(uint32_t now_ms);
-  void schedule_ping_reply(uint32_t now_ms);
+  // STATUS now to a request addressed to this id, in a reply slot to a broadcast one.
+  void answer_with_status(uint8_t target, uint32_t now_ms);
   bool addressed_to_me(uint8_t target) const;
 
   Settings settings_;

@@ -114,16 +114,22 @@ void FrameParser::set_body(uint8_t index, uint8_t value) {
   }
 }
 
-// Drops the candidate: its body bytes go back to the front of the scan queue, ahead of whatever
-// was still queued. The candidate's two sync bytes are not rescanned (they were the failed marker).
-void FrameParser::requeue() {
+// Moves the bytes still queued down to just behind the candidate's fill_ bytes; returns the
+// index past the last one.
+uint8_t FrameParser::pack_queue() {
   uint8_t end = fill_;
   for (uint8_t i = queue_read_; i < queue_end_; ++i) {
     set_body(end, body(i));
     ++end;
   }
+  return end;
+}
+
+// Drops the candidate: its body bytes go back to the front of the scan queue, ahead of whatever
+// was still queued. The candidate's two sync bytes are not rescanned (they were the failed marker).
+void FrameParser::requeue() {
+  queue_end_ = pack_queue();
   queue_read_ = 0;
-  queue_end_ = end;
   fill_ = 0;
   state_ = kHunting;
 }
@@ -200,11 +206,7 @@ bool FrameParser::push(uint8_t byte) {
   }
   // Bytes left over after a frame found by a rescan come first. The returned frame may now be
   // overwritten, so they move to the front, behind any candidate, and the new byte joins them.
-  uint8_t end = fill_;
-  for (uint8_t i = queue_read_; i < queue_end_; ++i) {
-    set_body(end, body(i));
-    ++end;
-  }
+  uint8_t end = pack_queue();
   queue_read_ = fill_;
   if (end < kBodyCapacity) {
     set_body(end, byte);

@@ -81,6 +81,7 @@ class FrameParser {
   void set_body(uint8_t index, uint8_t value);
   bool step(uint8_t byte);
   bool drain();
+  uint8_t pack_queue();
   void requeue();
 
   Frame frame_;

@@ -17,19 +17,26 @@ bool known(uint8_t param) {
 }
 
 bool is_servo_cal(uint8_t param) {
-  return param >= kServoCal0 && param < kServoCal0 + kServoTablePoints;
+  return param >= kServoCal0 && param < kServoCal0 + kServoCalPoints;
 }
 
 }  // namespace
 
-bool servo_table_monotonic(const uint16_t table[kServoTablePoints]) {
+bool servo_table_monotonic(const uint16_t table[kServoCalPoints]) {
   bool rising = true;
   bool falling = true;
-  for (uint8_t i = 1; i < kServoTablePoints; ++i) {
+  for (uint8_t i = 1; i < kServoCalPoints; ++i) {
     if (table[i] < table[i - 1]) rising = false;
     if (table[i] > table[i - 1]) falling = false;
   }
   return rising || falling;
+}
+
+int32_t clamp_to_spec(Param param, int32_t value) {
+  ParamSpec spec;
+  if (!param_spec(static_cast<uint8_t>(param), &spec)) return value;
+  if (value < spec.min) return spec.min;
+  return value > spec.max ? spec.max : value;
 }
 
 Settings::Settings(Storage &storage)
@@ -78,8 +85,8 @@ ParamResult Settings::set(uint8_t param, int32_t value) {
   return ParamResult::OK;
 }
 
-void Settings::servo_table(uint16_t table[kServoTablePoints]) const {
-  for (uint8_t i = 0; i < kServoTablePoints; ++i) {
+void Settings::servo_table(uint16_t table[kServoCalPoints]) const {
+  for (uint8_t i = 0; i < kServoCalPoints; ++i) {
     table[i] = static_cast<uint16_t>(read_value(static_cast<uint8_t>(kServoCal0 + i)));
   }
 }
@@ -91,7 +98,7 @@ bool Settings::acceptable(uint8_t param, int32_t value) const {
   if (param == kRadiusMin) return value < get(Param::RADIUS_MAX_UM);
   if (param == kRadiusMax) return value > get(Param::RADIUS_MIN_UM);
   if (is_servo_cal(param)) {
-    uint16_t table[kServoTablePoints];
+    uint16_t table[kServoCalPoints];
     servo_table(table);
     table[param - kServoCal0] = static_cast<uint16_t>(value);
     return servo_table_monotonic(table);

@@ -4,6 +4,7 @@
 
 #include <stdint.h>
 
+#include "actuation.h"
 #include "protocol_gen.h"
 
 namespace pb {
@@ -21,7 +22,6 @@ class Storage {
 };
 
 const uint16_t kEepromSize = 1024;
-const uint8_t kServoTablePoints = 9;
 
 // EEPROM layout, all little-endian, one block from address 0:
 //   0-1 magic 'P' 'B' | 2 layout version | 3 parameter count | 4 id | 5 resets | 6 last reset cause
@@ -48,7 +48,11 @@ const uint16_t kBlockSize = kCrcAddress + 2;
 }  // namespace eeprom_layout
 
 // True when the nine pulses never decrease or never increase (a servo mounted either way round).
-bool servo_table_monotonic(const uint16_t table[kServoTablePoints]);
+bool servo_table_monotonic(const uint16_t table[kServoCalPoints]);
+
+// value moved into param's protocol range (unchanged for an unknown id), for values that never
+// passed Settings::set(): those in a START, and the estimators' inputs from any caller.
+int32_t clamp_to_spec(Param param, int32_t value);
 
 class Settings {
  public:
@@ -75,7 +79,7 @@ class Settings {
   // stay below RADIUS_MAX_UM and the servo table monotonic, or OUT_OF_RANGE. (BUSY is the
   // caller's decision.)
   ParamResult set(uint8_t param, int32_t value);
-  void servo_table(uint16_t table[kServoTablePoints]) const;
+  void servo_table(uint16_t table[kServoCalPoints]) const;
 
  private:
   bool block_valid() const;

@@ -56,6 +56,13 @@ TEST_CASE("direct estimation handles the ends of the ADC range and odd parameter
   p.ref_distance_mm = -3;
   const uint8_t s = pb::estimate_direct(500, p);
   CHECK(s >= 1);
+  // The same as with the nearest in-range values given outright.
+  pb::EstimationParams in_range = p;
+  in_range.ref_value = 1022;
+  in_range.diameter_mm = 10;
+  in_range.ref_distance_mm = 10;
+  CHECK(s == pb::estimate_direct(500, in_range));
+  CHECK(s != pb::estimate_direct(500, paper_params()));
 }
 
 TEST_CASE("linear estimation splits the group's intensity range into equal bands") {

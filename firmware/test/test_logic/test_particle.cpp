@@ -490,7 +490,7 @@ TEST_CASE("ticked as main.cpp does, each 50 Hz frame carries the next step of th
       }
       p.tick(now, (now / 20 + 1) * 20);
     }
-    uint16_t table[pb::kServoTablePoints];
+    uint16_t table[pb::kServoCalPoints];
     p.settings().servo_table(table);
     const pb::Geometry g = {static_cast<uint32_t>(p.settings().get(pb::Param::RADIUS_MIN_UM)),
                             static_cast<uint32_t>(p.settings().get(pb::Param::RADIUS_MAX_UM))};

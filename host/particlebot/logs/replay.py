@@ -52,9 +52,7 @@ class ReplayRadio(Radio):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         url.check_options({"speed"})
-        speed_text = url.options.get("speed", "1")
-        speed = math.inf if speed_text == "max" else url.get_float("speed", 1.0)
-        return cls(Path(url.target), speed, url=url.text)
+        return cls(Path(url.target), url.get_speed(), url=url.text)
 
     @property
     def finished(self) -> bool:

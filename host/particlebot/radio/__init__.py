@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import importlib
+import math
 import threading
 import time
 from abc import ABC, abstractmethod
@@ -131,6 +132,13 @@ class RadioUrl:
             return int(value, 0)
         except ValueError:
             raise InvalidRadioUrlError(f"{self.text}: {key}={value} is not an integer") from None
+
+    def get_speed(self) -> float:
+        """speed=K: K times real time; speed=max: as fast as possible (math.inf)."""
+        speed = math.inf if self.options.get("speed") == "max" else self.get_float("speed", 1.0)
+        if speed <= 0:
+            raise InvalidRadioUrlError(f"{self.text}: speed must be positive, or max")
+        return speed
 
     def check_options(self, allowed: set[str]) -> None:
         unknown = sorted(set(self.options) - allowed)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import queue
 from abc import abstractmethod
 from typing import Generic, Protocol, TypeVar
@@ -38,15 +37,6 @@ def parse_lamp(url: RadioUrl) -> Lamp:
             f"{url.text}: lamp=X,Y,H in metres, H above the photocells, e.g. lamp=0,0,0.28"
         )
     return Lamp(parts[0], parts[1], parts[2])
-
-
-def parse_speed(url: RadioUrl) -> float:
-    """speed=times real time, or max (math.inf)."""
-    text = url.options.get("speed", "1")
-    speed = math.inf if text == "max" else url.get_float("speed", 1.0)
-    if speed <= 0:
-        raise InvalidRadioUrlError(f"{url.text}: speed must be positive, or max")
-    return speed
 
 
 class SimulatedSwarm(Protocol):

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Self
 
 from particlebot.radio import InvalidRadioUrlError, LinkState, RadioError, RadioUrl
-from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp, parse_speed
+from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
 from particlebot.sim.harness import HarnessError
 from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
 
@@ -82,7 +82,7 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = parse_speed(url)
+        speed = url.get_speed()
         try:
             swarm = EmulatedSwarm(config)
         except (FileNotFoundError, HarnessError, OSError) as exc:

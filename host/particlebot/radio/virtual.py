@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Self
 
 from particlebot.radio import RadioError, RadioUrl
-from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp, parse_speed
+from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 OPTIONS = {"lamp", "speed", "spacing", "start", "seed", "kinematics", "noise"}
@@ -34,7 +34,7 @@ class VirtualRadio(SwarmRadio[VirtualSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = parse_speed(url)
+        speed = url.get_speed()
         try:
             swarm = VirtualSwarm(config)
         except (OSError, ImportError) as exc:

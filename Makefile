@@ -23,13 +23,20 @@ help:
 
 # ---- setup ------------------------------------------------------------------------------------
 
+# The stamp is an included makefile: when make has to create it (installing the packages), it
+# then reads this Makefile again, so the wildcards below (the Arduino core's sources) see the
+# files the packages just installed. Goals that need no package (help, clean) skip it.
 $(BUILD)/.system-deps:
 	@missing=$$(for p in $(SYSTEM_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
 	if [ -n "$$missing" ]; then \
 	  echo "Installing Debian packages:" $$missing; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing; \
 	fi
-	@mkdir -p $(BUILD) && touch $@
+	@mkdir -p $(BUILD) && echo '# Debian packages checked by make' > $@
+
+ifneq ($(filter-out help clean,$(or $(MAKECMDGOALS),$(.DEFAULT_GOAL))),)
+include $(BUILD)/.system-deps
+endif
 
 system-deps: $(BUILD)/.system-deps
 

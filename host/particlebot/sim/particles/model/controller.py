@@ -1,0 +1,82 @@
+"""The contract between the world and a vectorised controller: what it senses, what it commands."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+class WorldView(Protocol):
+    """What the world lets a controller sense at the current step; every array has one entry per
+    particle (index order is fixed for the whole run) and must be treated as read-only.
+
+    The world computes these lazily and caches them for the step, so a controller that only
+    re-estimates every few minutes pays for the light model only then.
+    """
+
+    @property
+    def count(self) -> int:
+        """N, the number of particles (the passive objects of a scenario are not particles)."""
+
+    @property
+    def t(self) -> float:
+        """Simulated seconds since the run began."""
+
+    @property
+    def x(self) -> FloatArray:
+        """Centre x (m)."""
+
+    @property
+    def y(self) -> FloatArray:
+        """Centre y (m)."""
+
+    @property
+    def r_min(self) -> float:
+        """Contracted radius (m)."""
+
+    @property
+    def r_max(self) -> float:
+        """Fully expanded radius (m)."""
+
+    def light_distance(self) -> FloatArray:
+        """Ground distance (m) from each centre to the lamp's foot, as the published simulator's
+        phase rule uses it; under shadow mode 1 a shadowed particle is reported beyond every lit
+        one (it goes last)."""
+
+    def light_readings(self) -> FloatArray:
+        """Each particle's intensity V_n (0..1023, unrounded): eq. 11 of the SI for the lamp's
+        straight-line distance, 0 where an obstacle shadows the particle (modes 1 and 2)."""
+
+    def acting(self) -> BoolArray:
+        """True where a particle may actuate now: alive, attached, and not held still by shadow
+        mode 2. The world holds the others at R_min whatever a controller commands."""
+
+
+class Controller(ABC):
+    """Decides every particle's commanded radius each step, vectorised over the swarm.
+
+    The world calls bind() once before the first step, then command() every step with the view
+    of that step. command() writes radii in metres into `out` (shape (N,), float64); the world
+    clamps them to [r_min, r_max] and then applies the servo's stall limit, so a controller says
+    what the servo is told, not where the body ends up. Controllers draw randomness only from
+    the generator bind() gives, so a run is reproduced by its seed.
+    """
+
+    @abstractmethod
+    def bind(self, count: int, rng: np.random.Generator) -> None:
+        """Sizes the controller's state for `count` particles; called once before the first step."""
+
+    @abstractmethod
+    def command(self, view: WorldView, out: FloatArray) -> None:
+        """Writes every particle's commanded radius (m) for the step at view.t into out."""
+
+    def phase(self, view: WorldView) -> FloatArray:
+        """Where each particle is in its cycle, 0..1 (NaN where it is not cycling); pictures colour
+        particles by it. The default says nothing is known."""
+        return np.full(view.count, np.nan)

@@ -1,4 +1,5 @@
-"""An XBee Series 1 emulator on a pty: API mode 1/2 (what digi-xbee needs) or transparent mode."""
+"""An XBee Series 1 emulator on a pty: API mode 1/2 (what digi-xbee needs) or transparent mode,
+with the configuration registers a provisioning tool sets, reads back and writes to flash."""
 
 from __future__ import annotations
 
@@ -12,6 +13,23 @@ from pathlib import Path
 from tests.host.ptys import VanishingPty
 
 _ESCAPED = frozenset({0x7E, 0x7D, 0x11, 0x13})
+
+# Registers a host may set, with the largest value a Series 1 takes (numbers) or None (text).
+# Ranges from Digi's 802.15.4 manual; an out-of-range value is refused as a real radio does.
+SETTABLE: dict[bytes, int | None] = {
+    b"ID": 0xFFFF,
+    b"CH": 0x1A,
+    b"MY": 0xFFFF,
+    b"DH": 0xFFFFFFFF,
+    b"DL": 0xFFFFFFFF,
+    b"NI": None,
+    b"EE": 1,
+    b"BD": 7,
+    b"AP": 2,
+    b"CE": 1,
+}
+_MIN_CHANNEL = 0x0B
+KEY_BYTES = 16
 
 
 def api_frame(body: bytes, escaped: bool) -> bytes:
@@ -81,6 +99,12 @@ class XBeeEmulator:
     API mode answers the local AT queries digi-xbee's open() makes (AP HV VR SH SL NI MY CE),
     acknowledges TX requests with a TX status, records remote AT requests (the 4 s stall comes
     from those) without answering them, and injects RX16/RX64 packets "from particles".
+
+    Configuration: the registers in SETTABLE can be set and read in API mode (AT frames) and in
+    transparent command mode (+++, ATxx[value], ATCN). KY is write-only, as on a real radio: it
+    is accepted and answered with an empty value. WR copies the registers and the key to
+    `saved` (non-volatile memory) and power_cycle() restores them. A new AP takes effect after
+    the reply in API mode and on leaving command mode (ATCN), as on the radio.
     """
 
     def __init__(
@@ -106,7 +130,16 @@ class XBeeEmulator:
             b"NI": node_id,
             b"MY": my.to_bytes(2, "big"),
             b"CE": b"\x00",
+            b"ID": b"\x33\x32",  # factory defaults
+            b"CH": b"\x0c",
+            b"DH": b"\x00",
+            b"DL": b"\x00",
+            b"EE": b"\x00",
+            b"BD": b"\x03",
         }
+        self.key: bytes | None = None
+        self.saved: dict[bytes, bytes] = dict(self.registers)
+        self.saved_key: bytes | None = None
         self.transmissions: list[Transmission] = []
         self.remote_at_requests: list[bytes] = []
         self.transparent_out = bytearray()
@@ -141,6 +174,14 @@ class XBeeEmulator:
         with self.changed:
             return self.changed.wait_for(predicate, timeout)
 
+    def power_cycle(self) -> None:
+        """Off and on again: what WR saved is all that is left."""
+        self._stop_thread()
+        self.registers = dict(self.saved)
+        self.key = self.saved_key
+        self.api_mode = self.registers[b"AP"][0]
+        self._start_thread()
+
     def unplug(self) -> None:
         self._stop_thread()
         self._pty.unplug()
@@ -172,6 +213,7 @@ class XBeeEmulator:
 
     def _serve(self) -> None:
         parser = _Parser(escaped_mode=self.api_mode == 2)
+        parser_mode = self.api_mode
         master = self._pty.master
         last_byte_at = time.monotonic()
         plus_pending_since: float | None = None
@@ -207,23 +249,76 @@ class XBeeEmulator:
                         self.transparent_out += data
                         self.changed.notify_all()
                 continue
+            if parser_mode != self.api_mode:
+                parser, parser_mode = _Parser(escaped_mode=self.api_mode == 2), self.api_mode
             parser.feed(data)
             frames, parser.frames = parser.frames, []
             for body in frames:
                 self._handle(body)
 
     def _transparent_command(self, command: bytes) -> bool:
+        """Answers one command-mode line; False when it ends command mode."""
         with self.changed:
             self.at_commands_seen.append(command)
             self.changed.notify_all()
-        if command.upper() == b"ATCN":
+        if not command.upper().startswith(b"AT"):
+            self._write(b"ERROR\r")
+            return True
+        name, argument = command[2:4].upper(), command[4:].strip()
+        if name == b"CN":
             self._write(b"OK\r")
+            self.api_mode = self.registers[b"AP"][0]  # a new AP applies on leaving
             return False
-        if command.upper() == b"ATAP":
-            self._write(b"0\r")
-        else:
+        if name in (b"WR", b"AC") and not argument:
+            self._execute(name)
             self._write(b"OK\r")
+        elif not argument:
+            value = self._query(name)
+            if value is None:
+                self._write(b"ERROR\r")
+            elif name == b"NI":
+                self._write(value + b"\r")
+            else:
+                self._write(f"{int.from_bytes(value, 'big'):X}\r".encode())
+        else:
+            try:
+                raw = argument if name == b"NI" else _hex_bytes(argument, name)
+            except ValueError:
+                self._write(b"ERROR\r")
+                return True
+            self._write(b"OK\r" if self._set(name, raw) == 0 else b"ERROR\r")
         return True
+
+    def _query(self, name: bytes) -> bytes | None:
+        if name == b"KY":
+            return b""  # write-only: a radio never tells its key
+        return self.registers.get(name)
+
+    def _set(self, name: bytes, value: bytes) -> int:
+        """0 (OK) or 3 (invalid parameter), as the AT response status."""
+        if name == b"KY":
+            if len(value) > KEY_BYTES:
+                return 3
+            self.key = value.rjust(KEY_BYTES, b"\x00")
+            return 0
+        if name not in SETTABLE:
+            return 3 if name in self.registers else 2
+        largest = SETTABLE[name]
+        if largest is None:
+            if len(value) > 20:
+                return 3
+        else:
+            number = int.from_bytes(value, "big")
+            if number > largest or (name == b"CH" and number < _MIN_CHANNEL):
+                return 3
+            value = number.to_bytes(max(1, (number.bit_length() + 7) // 8), "big")
+        self.registers[name] = value
+        return 0
+
+    def _execute(self, name: bytes) -> None:
+        if name == b"WR":
+            self.saved = dict(self.registers)
+            self.saved_key = self.key
 
     def _handle(self, body: bytes) -> None:
         api_id = body[0]
@@ -233,16 +328,20 @@ class XBeeEmulator:
             with self.changed:
                 self.at_commands_seen.append(command)
                 self.changed.notify_all()
-            if value:
-                self.registers[command] = value
-                status, answer = 0, b""
-            elif command in self.registers:
-                status, answer = 0, self.registers[command]
+            answer = b""
+            if command in (b"WR", b"AC") and not value:
+                self._execute(command)
+                status = 0
+            elif value:
+                status = self._set(command, value)
             else:
-                status, answer = 2, b""  # invalid command
+                found = self._query(command)
+                status, answer = (2, b"") if found is None else (0, found)  # 2: invalid command
             time.sleep(self.reply_delay)
             reply = bytes([0x88, frame_id]) + command + bytes([status]) + answer
             self._write(api_frame(reply, escaped))
+            if command == b"AP" and status == 0 and value:
+                self.api_mode = self.registers[b"AP"][0]  # switches after its reply
         elif api_id in (0x00, 0x01):  # TX64 / TX16 request
             frame_id = body[1]
             address_size = 8 if api_id == 0x00 else 2
@@ -258,3 +357,14 @@ class XBeeEmulator:
             with self.changed:
                 self.remote_at_requests.append(body)
                 self.changed.notify_all()
+
+
+def _hex_bytes(argument: bytes, name: bytes) -> bytes:
+    """A command-mode argument (hex digits) as the register's big-endian bytes."""
+    digits = argument.decode("ascii")
+    number = int(digits, 16)
+    if name == b"KY":
+        if number >> (8 * KEY_BYTES):
+            raise ValueError("key too long")
+        return number.to_bytes(KEY_BYTES, "big")
+    return number.to_bytes(max(1, (number.bit_length() + 7) // 8), "big")

@@ -6,6 +6,7 @@ import logging
 import queue
 import threading
 import time
+from collections.abc import Callable
 from typing import Any, Self
 
 import serial
@@ -34,10 +35,22 @@ _log = logging.getLogger(__name__)
 _PROBE_FRAME_ID = 0x52
 
 
-def at_command_frame(command: bytes, frame_id: int = _PROBE_FRAME_ID) -> bytes:
-    """An unescaped API frame 0x08 (local AT command) querying `command`."""
-    body = bytes([0x08, frame_id]) + command
+def at_command_frame(command: bytes, frame_id: int = _PROBE_FRAME_ID, value: bytes = b"") -> bytes:
+    """An unescaped API frame 0x08 (local AT command): `command` queried, or set to value."""
+    body = bytes([0x08, frame_id]) + command + value
     return bytes([0x7E, len(body) >> 8, len(body) & 0xFF]) + body + bytes([0xFF - sum(body) & 0xFF])
+
+
+def escape(frame: bytes) -> bytes:
+    """An API frame as API mode 2 sends it: every byte after the start delimiter that could be
+    mistaken for a control byte is sent as 0x7D, byte ^ 0x20."""
+    out = bytearray(frame[:1])
+    for byte in frame[1:]:
+        if byte in (0x7E, 0x7D, 0x11, 0x13):
+            out += bytes([0x7D, byte ^ 0x20])
+        else:
+            out.append(byte)
+    return bytes(out)
 
 
 def unescape(data: bytes) -> bytes:
@@ -64,7 +77,7 @@ def probe_mode(port: str, baud: int, *, api_timeout: float = 0.6, guard_s: float
     try:
         link.reset_input_buffer()
         link.write(at_command_frame(b"AP"))
-        reply = _read_until(link, api_timeout, lambda got: _api_mode_in(got) is not None)
+        reply = read_until(link, api_timeout, lambda got: _api_mode_in(got) is not None)
         mode = _api_mode_in(reply)
         if mode in (1, 2):
             return mode
@@ -75,7 +88,7 @@ def probe_mode(port: str, baud: int, *, api_timeout: float = 0.6, guard_s: float
         time.sleep(guard_s)
         link.reset_input_buffer()
         link.write(b"+++")
-        reply = _read_until(link, guard_s + 0.6, lambda got: b"OK\r" in got)
+        reply = read_until(link, guard_s + 0.6, lambda got: b"OK\r" in got)
         if b"OK\r" in reply:
             link.write(b"ATCN\r")  # leave command mode so the radio keeps working
             link.flush()
@@ -96,7 +109,8 @@ def _wrong_mode(port: str) -> WrongModeError:
     )
 
 
-def _read_until(link: serial.Serial, timeout: float, done: Any) -> bytes:
+def read_until(link: serial.Serial, timeout: float, done: Callable[[bytes], bool]) -> bytes:
+    """What the link delivers until done(everything so far) or timeout seconds pass."""
     got = b""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

@@ -1,0 +1,310 @@
+"""The fleet file (TOML, in the experiment folder): read, checked, and rewritten atomically as 0600.
+
+The file holds the radios' AES key, so it is only ever written whole, through a private temporary
+file renamed over the old one (a crash leaves either the old or the new file, never half of
+one), with mode 0600, and refused when others can read it. Tools that change it (flash, radio
+setup) hold an exclusive lock on its folder while they read, change and write it, so two of them
+running at once cannot lose each other's records.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as dt
+import os
+import stat
+import tempfile
+import tomllib
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+from particlebot.fleet.model import (
+    BaseStationRecord,
+    Fleet,
+    FleetError,
+    FleetKey,
+    ParticleRecord,
+)
+from particlebot.fleet.toml_writer import Hex, Table, Value, dumps
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks; one tool at a time
+    fcntl = None  # type: ignore[assignment]
+
+DEFAULT_FLEET_FILE = Path("fleet.toml")
+FORMAT_VERSION = 1
+PRIVATE_MODE = 0o600
+
+_HEADER = """\
+particlebot fleet file: the radio network of one experiment and every particle in it.
+Written by `particlebot fleet init`, `particlebot flash` and `particlebot radio setup`; values may
+be edited by hand (comments are not kept). It holds the radios' AES key: keep it private (mode
+0600, which the tools insist on) and out of version control."""
+
+_PARTICLE_KEYS = (
+    "board_serial",
+    "radio_address",
+    "definition_hash",
+    "image_sha256",
+    "flashed_at",
+    "radio_configured_at",
+    "note",
+    "calibration",
+)
+
+
+class FleetFileError(Exception):
+    """The fleet file is missing, unreadable, malformed or too open; the message says what to do."""
+
+
+# ---- reading -------------------------------------------------------------------------------------
+
+
+def load_fleet(path: Path) -> Fleet:
+    """The fleet in path; FleetFileError (one line, with what to do) when it cannot be used."""
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise FleetFileError(
+            f"no fleet file {path}: create one with `particlebot fleet init` (or name it with "
+            "--fleet)"
+        ) from None
+    except OSError as exc:
+        raise FleetFileError(f"cannot read {path}: {exc.strerror}") from None
+    check_private(path, info.st_mode)
+    try:
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise FleetFileError(f"cannot read {path}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise FleetFileError(f"{path} is not a text file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise FleetFileError(f"{path} is not valid TOML: {exc}") from None
+    try:
+        return _fleet_from(document)
+    except (FleetError, TypeError, ValueError) as exc:
+        raise FleetFileError(f"{path}: {exc}") from None
+
+
+def check_private(path: Path, mode: int) -> None:
+    if os.name == "nt":
+        return
+    if mode & (stat.S_IRWXG | stat.S_IRWXO):
+        raise FleetFileError(
+            f"{path} holds the radios' AES key but others may read it (mode "
+            f"{stat.S_IMODE(mode):04o}): run `chmod 600 {path}`, and make a new key with "
+            "`particlebot fleet init --new-key` if someone else may have read it"
+        )
+
+
+def _fleet_from(document: Mapping[str, Any]) -> Fleet:
+    _only(document, ("version", "radio", "base_station", "particles"), "the file")
+    version = document.get("version", FORMAT_VERSION)
+    if version != FORMAT_VERSION:
+        raise FleetError(f"format version {version} is not {FORMAT_VERSION}; update particlebot")
+    radio = _table(document, "radio", required=True)
+    _only(radio, ("pan_id", "channel", "key"), "[radio]")
+    fleet = Fleet(
+        pan_id=_int(radio, "pan_id", "[radio]"),
+        channel=_int(radio, "channel", "[radio]"),
+        key=FleetKey.from_hex(_str(radio, "key", "[radio]")),
+    )
+    base = _table(document, "base_station", required=False)
+    if base:
+        _only(base, ("radio_address", "radio_configured_at"), "[base_station]")
+        fleet.base_station = BaseStationRecord(
+            radio_address=_str(base, "radio_address", "[base_station]"),
+            radio_configured_at=_time(base, "radio_configured_at", "[base_station]"),
+        )
+    for name, entry in _table(document, "particles", required=False).items():
+        where = f"[particles.{name}]"
+        if not isinstance(entry, dict):
+            raise FleetError(f"{where} must be a table")
+        try:
+            particle_id = int(name)
+        except ValueError:
+            raise FleetError(f"{where}: particles are keyed by their id (1..253)") from None
+        _only(entry, _PARTICLE_KEYS, where)
+        calibration = entry.get("calibration", {})
+        if not isinstance(calibration, dict) or not all(
+            isinstance(v, int) and not isinstance(v, bool) for v in calibration.values()
+        ):
+            raise FleetError(f"{where}: calibration must be a table of integers")
+        fleet.record(
+            ParticleRecord(
+                id=particle_id,
+                board_serial=_str(entry, "board_serial", where, optional=True),
+                radio_address=_str(entry, "radio_address", where, optional=True),
+                definition_hash=_int(entry, "definition_hash", where, optional=True),
+                image_sha256=_str(entry, "image_sha256", where, optional=True),
+                flashed_at=_time(entry, "flashed_at", where),
+                radio_configured_at=_time(entry, "radio_configured_at", where),
+                note=_str(entry, "note", where, optional=True),
+                calibration=dict(calibration),
+            )
+        )
+    return fleet
+
+
+def _only(table: Mapping[str, Any], known: tuple[str, ...], where: str) -> None:
+    unknown = sorted(set(table) - set(known))
+    if unknown:
+        raise FleetError(f"unknown key {unknown[0]!r} in {where} (known: {', '.join(known)})")
+
+
+def _table(document: Mapping[str, Any], name: str, *, required: bool) -> dict[str, Any]:
+    table = document.get(name)
+    if table is None:
+        if required:
+            raise FleetError(f"[{name}] is missing")
+        return {}
+    if not isinstance(table, dict):
+        raise FleetError(f"{name} must be a table")
+    return table
+
+
+def _int(table: Mapping[str, Any], name: str, where: str, *, optional: bool = False) -> Any:
+    item = table.get(name)
+    if item is None and optional:
+        return None
+    if not isinstance(item, int) or isinstance(item, bool):
+        raise FleetError(f"{where}: {name} must be an integer")
+    return item
+
+
+def _str(table: Mapping[str, Any], name: str, where: str, *, optional: bool = False) -> Any:
+    item = table.get(name)
+    if item is None and optional:
+        return None
+    if not isinstance(item, str):
+        raise FleetError(f"{where}: {name} must be a string")
+    return item
+
+
+def _time(table: Mapping[str, Any], name: str, where: str) -> dt.datetime | None:
+    item = table.get(name)
+    if item is None:
+        return None
+    if not isinstance(item, dt.datetime) or item.tzinfo is None:
+        raise FleetError(f"{where}: {name} must be a date and time with its UTC offset")
+    return item
+
+
+# ---- writing -------------------------------------------------------------------------------------
+
+
+def render(fleet: Fleet) -> str:
+    """The fleet as the text of a fleet file."""
+    tables = [
+        Table(
+            ["radio"],
+            {
+                "pan_id": Hex(fleet.pan_id, 4),
+                "channel": Hex(fleet.channel, 2),
+                "key": fleet.key.secret_hex(),
+            },
+        )
+    ]
+    if fleet.base_station is not None:
+        base = fleet.base_station
+        tables.append(
+            Table(
+                ["base_station"],
+                {
+                    "radio_address": base.radio_address,
+                    "radio_configured_at": base.radio_configured_at,
+                },
+            )
+        )
+    for particle_id in fleet.roster_ids():
+        particle = fleet.particles[particle_id]
+        values: dict[str, Value | None] = {
+            "board_serial": particle.board_serial,
+            "radio_address": particle.radio_address,
+            "definition_hash": None
+            if particle.definition_hash is None
+            else Hex(particle.definition_hash, 8),
+            "image_sha256": particle.image_sha256,
+            "flashed_at": particle.flashed_at,
+            "radio_configured_at": particle.radio_configured_at,
+            "note": particle.note,
+        }
+        tables.append(Table(["particles", str(particle_id)], values))
+        if particle.calibration:
+            tables.append(
+                Table(["particles", str(particle_id), "calibration"], dict(particle.calibration))
+            )
+    return dumps(tables, top={"version": FORMAT_VERSION}, comment=_HEADER)
+
+
+def save_fleet(fleet: Fleet, path: Path) -> None:
+    """Writes the whole file atomically with mode 0600."""
+    text = render(fleet)
+    directory = path.parent if str(path.parent) else Path(".")
+    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        # mkstemp creates the file 0600 already; say so, whatever the platform's default.
+        if hasattr(os, "fchmod"):
+            os.fchmod(fd, PRIVATE_MODE)
+        with os.fdopen(fd, "w", encoding="utf-8") as file:
+            file.write(text)
+            file.flush()
+            os.fsync(file.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+        raise
+    _sync_directory(directory)
+
+
+def create_fleet(fleet: Fleet, path: Path, *, replace: bool = False) -> None:
+    """Writes a new fleet file; FleetFileError when one exists already (unless replace)."""
+    with _locked(path):
+        if path.exists() and not replace:
+            raise FleetFileError(
+                f"{path} exists already; `particlebot fleet show` lists it (--new-key makes a new "
+                "key for it)"
+            )
+        save_fleet(fleet, path)
+
+
+@contextlib.contextmanager
+def updating_fleet(path: Path) -> Iterator[Fleet]:
+    """Reads the fleet under an exclusive lock, lets the caller change it, and writes it back
+    (only if the block ends without an exception)."""
+    with _locked(path):
+        fleet = load_fleet(path)
+        yield fleet
+        save_fleet(fleet, path)
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    # The folder is locked rather than the file, because the file is replaced by each write.
+    if fcntl is None:
+        yield
+        return
+    directory = path.parent if str(path.parent) else Path(".")
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError as exc:
+        raise FleetFileError(f"cannot open the folder of {path}: {exc.strerror}") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def _sync_directory(directory: Path) -> None:
+    # The rename itself survives a power cut only once the folder is synced.
+    if os.name == "nt":
+        return
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)

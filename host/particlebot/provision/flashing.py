@@ -1,0 +1,246 @@
+"""Flashing particles: reset a board into its bootloader, upload, give it an id, record it.
+
+The state machine for one board: a running port is touched at 1200 baud and the tool waits for
+the same board's bootloader port; a bootloader port is uploaded to at once. The upload reads the
+board's EEPROM, decides its id (the one asked for, the one it already has, or the fleet's next
+free one), writes flash and id in the same bootloader session, and the fleet file records the
+particle. Many boards are flashed one after another as a person plugs them in; a board that
+fails is reported and skipped, and the run goes on.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol
+
+from particlebot.fleet import (
+    Fleet,
+    FleetError,
+    FleetFileError,
+    ParticleRecord,
+    timestamp,
+    updating_fleet,
+)
+from particlebot.provision import identity
+from particlebot.provision.avrdude import AvrdudeError, EepromEditor, UploadReport
+from particlebot.provision.boards import BoardError, BoardMode, BoardPort, UsbBus
+from particlebot.provision.image import FirmwareImage
+
+
+class Uploader(Protocol):
+    """Writes an image to a board in its bootloader (provision.avrdude.Avrdude)."""
+
+    def upload(self, port: str, hex_file: Path, edit_eeprom: EepromEditor) -> UploadReport: ...
+
+
+@dataclass(frozen=True)
+class FlashOutcome:
+    """What happened to one board."""
+
+    port: str
+    particle_id: int | None = None
+    id_source: str = ""
+    """"new" (next free in the fleet), "kept" (the id it had) or "given" (--id)."""
+    report: UploadReport | None = None
+    error: str | None = None
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+    def line(self) -> str:
+        if not self.ok:
+            return f"FAILED {self.port}: {self.error}"
+        assert self.report is not None
+        eeprom = "id written" if self.report.eeprom_bytes_written else "EEPROM unchanged"
+        return (
+            f"particle {self.particle_id} ({self.id_source} id) on {self.port}: "
+            f"{self.report.flash_bytes_verified:,} B flashed and verified, {eeprom}, "
+            f"{self.seconds:.1f} s"
+        )
+
+
+@dataclass
+class FlashPlan:
+    """What every board of a run gets."""
+
+    image: FirmwareImage
+    fleet_path: Path
+    definition_hash: int | None
+    """The image's protocol definition hash, when the emulator could read it."""
+    requested_id: int | None = None
+    renumber: bool = False
+    """Give a board that already has an id the next free one instead."""
+
+
+@dataclass
+class Timing:
+    bootloader_timeout_s: float = 10.0
+    """How long a touched board may take to show its bootloader port."""
+    poll_s: float = 0.2
+    replug_gap_s: float = 3.0
+    """A flashed board counts as unplugged once gone this long (it drops off USB briefly while
+    it leaves its bootloader and starts the new firmware)."""
+    clock: Callable[[], float] = time.monotonic
+    sleep: Callable[[float], None] = time.sleep
+    now: Callable[[], dt.datetime] = timestamp
+
+
+class Flasher:
+    def __init__(
+        self,
+        usb: UsbBus,
+        uploader: Uploader,
+        plan: FlashPlan,
+        *,
+        timing: Timing | None = None,
+        say: Callable[[str], None] = print,
+    ) -> None:
+        self.usb = usb
+        self.uploader = uploader
+        self.plan = plan
+        self.timing = timing or Timing()
+        self.say = say
+        self.outcomes: list[FlashOutcome] = []
+        """Every board flash_many() dealt with, also when it was interrupted."""
+
+    # ---- one board ---------------------------------------------------------------------------
+
+    def flash(self, board: BoardPort) -> FlashOutcome:
+        started = self.timing.clock()
+        try:
+            target = board
+            if board.mode is BoardMode.RUNNING:
+                target = self.reset_into_bootloader(board)
+            return self._upload(board, target, started)
+        except (
+            BoardError,
+            AvrdudeError,
+            identity.IdentityError,
+            FleetError,
+            FleetFileError,
+        ) as exc:
+            return FlashOutcome(board.device, error=str(exc), seconds=self._since(started))
+
+    def reset_into_bootloader(self, board: BoardPort) -> BoardPort:
+        """Touches a running board and waits for its bootloader port."""
+        timing = self.timing
+        already = {b.device for b in self.usb.boards() if b.mode is BoardMode.BOOTLOADER}
+        self.usb.touch(board.device)
+        deadline = timing.clock() + timing.bootloader_timeout_s
+        while True:
+            for candidate in self.usb.boards():
+                if candidate.mode is not BoardMode.BOOTLOADER:
+                    continue
+                same_place = board.location is not None and candidate.location == board.location
+                if same_place or (board.location is None and candidate.device not in already):
+                    return candidate
+            if timing.clock() >= deadline:
+                raise BoardError(
+                    f"no bootloader appeared within {timing.bootloader_timeout_s:.0f} s of the "
+                    "1200-baud reset: press the board's reset button (or unplug and replug it) "
+                    "and try again"
+                )
+            timing.sleep(timing.poll_s)
+
+    def _upload(self, board: BoardPort, target: BoardPort, started: float) -> FlashOutcome:
+        plan = self.plan
+        with updating_fleet(plan.fleet_path) as fleet:
+            chosen: dict[str, int | str] = {}
+
+            def edit(before: bytes) -> bytes:
+                current = identity.id_in(before)
+                particle_id, source = choose_id(fleet, current, plan)
+                chosen.update(id=particle_id, source=source)
+                return before if particle_id == current else identity.with_id(before, particle_id)
+
+            report = self.uploader.upload(target.device, plan.image.path, edit)
+            particle_id = int(chosen["id"])
+            record = fleet.get(particle_id) or ParticleRecord(particle_id)
+            record.board_serial = board.serial_number or target.serial_number or record.board_serial
+            record.definition_hash = plan.definition_hash
+            record.image_sha256 = plan.image.sha256
+            record.flashed_at = self.timing.now()
+            record.calibration = identity.calibration(report.eeprom_after)
+            fleet.record(record)
+        return FlashOutcome(
+            target.device,
+            particle_id=particle_id,
+            id_source=str(chosen["source"]),
+            report=report,
+            seconds=self._since(started),
+        )
+
+    def _since(self, started: float) -> float:
+        return self.timing.clock() - started
+
+    # ---- one after another -------------------------------------------------------------------
+
+    def wait_for_board(self, timeout_s: float) -> BoardPort | None:
+        """The first board present within timeout_s; None if none came."""
+        deadline = self.timing.clock() + timeout_s
+        while True:
+            boards = self.usb.boards()
+            if boards:
+                return boards[0]
+            if self.timing.clock() >= deadline:
+                return None
+            self.timing.sleep(self.timing.poll_s)
+
+    def flash_many(
+        self, *, count: int | None = None, idle_timeout_s: float | None = None
+    ) -> list[FlashOutcome]:
+        """Flashes each board that appears, once, until count boards were done or none came for
+        idle_timeout_s (None: until interrupted)."""
+        timing = self.timing
+        outcomes = self.outcomes
+        first = len(outcomes)
+        last_seen: dict[str, float] = {}  # sockets of boards done, and when last present
+        idle_since = timing.clock()
+        while count is None or len(outcomes) - first < count:
+            now = timing.clock()
+            boards = self.usb.boards()
+            present = {b.socket for b in boards}
+            for socket in list(last_seen):
+                if socket in present:
+                    last_seen[socket] = now
+                elif now - last_seen[socket] > timing.replug_gap_s:
+                    del last_seen[socket]
+            fresh = [b for b in boards if b.socket not in last_seen]
+            if not fresh:
+                if idle_timeout_s is not None and now - idle_since >= idle_timeout_s:
+                    break
+                timing.sleep(timing.poll_s)
+                continue
+            board = fresh[0]
+            self.say(f"[{len(outcomes) + 1}] {board.device} ({board.mode.value})...")
+            outcome = self.flash(board)
+            last_seen[board.socket] = last_seen[outcome.port] = timing.clock()
+            outcomes.append(outcome)
+            self.say(f"[{len(outcomes)}] {outcome.line()}")
+            idle_since = timing.clock()
+        return outcomes[first:]
+
+
+def choose_id(fleet: Fleet, current: int, plan: FlashPlan) -> tuple[int, str]:
+    """The id a board gets: the one asked for, else the one it has, else the next free one."""
+    if plan.requested_id is not None:
+        return plan.requested_id, "given"
+    if identity.is_assigned(current) and not plan.renumber:
+        return current, "kept"
+    return fleet.next_free_id(), "new"
+
+
+def summary(outcomes: list[FlashOutcome]) -> str:
+    done = [o for o in outcomes if o.ok]
+    failed = [o for o in outcomes if not o.ok]
+    ids = ", ".join(str(o.particle_id) for o in done) or "none"
+    text = f"{len(done)} particle(s) flashed (ids {ids})"
+    if failed:
+        text += f"; {len(failed)} failed: " + "; ".join(f"{o.port} ({o.error})" for o in failed)
+    return text

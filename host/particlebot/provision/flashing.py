@@ -83,9 +83,14 @@ class Timing:
     bootloader_timeout_s: float = 10.0
     """How long a touched board may take to show its bootloader port."""
     poll_s: float = 0.2
-    replug_gap_s: float = 3.0
-    """A flashed board counts as unplugged once gone this long (it drops off USB briefly while
-    it leaves its bootloader and starts the new firmware)."""
+    settle_s: float = 2.0
+    """After an upload the board leaves its bootloader (0.5 s) and, if its new firmware has USB,
+    comes back as a running port (about a second later): until then, whatever shows up where it
+    is plugged in is that board."""
+    replug_gap_s: float = 0.3
+    """A flashed board counts as unplugged once its place has been empty this long."""
+    remind_s: float = 15.0
+    """How long to wait before reminding the person to unplug a flashed board."""
     clock: Callable[[], float] = time.monotonic
     sleep: Callable[[float], None] = time.sleep
     now: Callable[[], dt.datetime] = timestamp
@@ -196,35 +201,64 @@ class Flasher:
         self, *, count: int | None = None, idle_timeout_s: float | None = None
     ) -> list[FlashOutcome]:
         """Flashes each board that appears, once, until count boards were done or none came for
-        idle_timeout_s (None: until interrupted)."""
+        idle_timeout_s (None: until interrupted).
+
+        Boards carry nothing that tells them apart over USB, so a board just flashed is told
+        from the next one by where it is plugged in: its place counts as taken until it has been
+        empty for a moment (after the settle time), i.e. until the person unplugged it. A
+        bootloader port there after the settle time is always taken as a board to flash (someone
+        pressed reset)."""
         timing = self.timing
         outcomes = self.outcomes
         first = len(outcomes)
-        last_seen: dict[str, float] = {}  # sockets of boards done, and when last present
-        idle_since = timing.clock()
+        taken: dict[str, _Taken] = {}
+        idle_since = reminded = timing.clock()
         while count is None or len(outcomes) - first < count:
             now = timing.clock()
             boards = self.usb.boards()
             present = {b.socket for b in boards}
-            for socket in list(last_seen):
+            for socket, mark in list(taken.items()):
                 if socket in present:
-                    last_seen[socket] = now
-                elif now - last_seen[socket] > timing.replug_gap_s:
-                    del last_seen[socket]
-            fresh = [b for b in boards if b.socket not in last_seen]
+                    mark.last_present = now
+                elif mark.settled(now, timing) and now - mark.last_present >= timing.replug_gap_s:
+                    del taken[socket]
+            fresh = [
+                b for b in boards if b.socket not in taken or _reset_by_hand(b, taken, now, timing)
+            ]
             if not fresh:
                 if idle_timeout_s is not None and now - idle_since >= idle_timeout_s:
                     break
+                if taken and now - reminded >= timing.remind_s:
+                    self.say("Waiting for the next board: unplug the one just flashed first.")
+                    reminded = now
                 timing.sleep(timing.poll_s)
                 continue
             board = fresh[0]
             self.say(f"[{len(outcomes) + 1}] {board.device} ({board.mode.value})...")
             outcome = self.flash(board)
-            last_seen[board.socket] = last_seen[outcome.port] = timing.clock()
+            finished = timing.clock()
+            # Without USB locations the bootloader's port has a name of its own: mark it too.
+            for socket in {board.socket, outcome.port}:
+                taken[socket] = _Taken(finished, finished)
             outcomes.append(outcome)
             self.say(f"[{len(outcomes)}] {outcome.line()}")
-            idle_since = timing.clock()
+            idle_since = reminded = timing.clock()
         return outcomes[first:]
+
+
+@dataclass
+class _Taken:
+    """The place of a board that was flashed."""
+
+    finished_at: float
+    last_present: float
+
+    def settled(self, now: float, timing: Timing) -> bool:
+        return now - self.finished_at >= timing.settle_s
+
+
+def _reset_by_hand(board: BoardPort, taken: dict[str, _Taken], now: float, timing: Timing) -> bool:
+    return board.mode is BoardMode.BOOTLOADER and taken[board.socket].settled(now, timing)
 
 
 def choose_id(fleet: Fleet, current: int, plan: FlashPlan) -> tuple[int, str]:

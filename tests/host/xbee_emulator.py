@@ -18,7 +18,7 @@ _ESCAPED = frozenset({0x7E, 0x7D, 0x11, 0x13})
 # Ranges from Digi's 802.15.4 manual; an out-of-range value is refused as a real radio does.
 SETTABLE: dict[bytes, int | None] = {
     b"ID": 0xFFFF,
-    b"CH": 0x1A,
+    b"CH": 0xFF,  # and within the radio's channels
     b"MY": 0xFFFF,
     b"DH": 0xFFFFFFFF,
     b"DL": 0xFFFFFFFF,
@@ -28,7 +28,6 @@ SETTABLE: dict[bytes, int | None] = {
     b"AP": 2,
     b"CE": 1,
 }
-_MIN_CHANNEL = 0x0B
 KEY_BYTES = 16
 
 
@@ -117,8 +116,11 @@ class XBeeEmulator:
         node_id: bytes = b"BASE",
         reply_delay: float = 0.002,
         guard_s: float = 0.1,
+        channels: range = range(0x0B, 0x1B),
     ) -> None:
+        """channels: those the radio accepts (an XBee-PRO S1 has 0x0C-0x17 only)."""
         self.api_mode = api_mode  # 0: transparent
+        self.channels = channels
         self.reply_delay = reply_delay
         self.guard_s = guard_s
         self.registers: dict[bytes, bytes] = {
@@ -276,6 +278,8 @@ class XBeeEmulator:
             value = self._query(name)
             if value is None:
                 self._write(b"ERROR\r")
+            elif name == b"KY":
+                self._write(b"OK\r")  # write-only: acknowledged, never shown
             elif name == b"NI":
                 self._write(value + b"\r")
             else:
@@ -309,7 +313,7 @@ class XBeeEmulator:
                 return 3
         else:
             number = int.from_bytes(value, "big")
-            if number > largest or (name == b"CH" and number < _MIN_CHANNEL):
+            if number > largest or (name == b"CH" and number not in self.channels):
                 return 3
             value = number.to_bytes(max(1, (number.bit_length() + 7) // 8), "big")
         self.registers[name] = value

@@ -17,9 +17,11 @@ the radio). So the setup runs in three stages on the radio's serial port at 9600
 
 from __future__ import annotations
 
+import contextlib
 import enum
+import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import serial
@@ -170,10 +172,12 @@ class XBeeSetup:
         device.set_sync_ops_timeout(self.sync_timeout_s)
         try:
             device.open()
-            for setting in plan.settings()[:-1]:
-                self._set(device, setting.command, setting.value)
-            self._set(device, "KY", plan.key.secret_bytes(), shown="KY")
-            self._set(device, plan.settings()[-1].command, plan.settings()[-1].value)
+            *settings, baud = plan.settings()
+            for setting in settings:
+                self._set(device, setting.command, setting.value, setting.shown)
+            with _library_logs_muted():
+                self._set(device, "KY", plan.key.secret_bytes(), "the AES key (KY)")
+            self._set(device, baud.command, baud.value, baud.shown)
             checked = []
             for setting in plan.settings():
                 read_back = self._get(device, setting.command)
@@ -200,12 +204,11 @@ class XBeeSetup:
         return address.upper(), checked
 
     @staticmethod
-    def _set(device: _Raw802WithoutLookups, command: str, value: bytes, shown: str = "") -> None:
+    def _set(device: _Raw802WithoutLookups, command: str, value: bytes, shown: str) -> None:
         try:
             device.set_parameter(command, bytearray(value), apply=True)
         except ATCommandException as exc:
-            what = shown or f"{command}={value.hex().upper()}"
-            raise RadioSetupError(f"the radio refused {what} ({exc})") from None
+            raise RadioSetupError(f"the radio refused {shown} ({exc})") from None
 
     @staticmethod
     def _get(device: _Raw802WithoutLookups, command: str) -> bytes:
@@ -240,6 +243,26 @@ class XBeeSetup:
             commands.leave()
         finally:
             link.close()
+
+
+# digi-xbee logs every frame it sends and receives at DEBUG level, in hex: the KY frame would put
+# the key into any log that records DEBUG.
+_LIBRARY_LOGGERS = ("digi.xbee.sender", "digi.xbee.reader", "digi.xbee.devices")
+
+
+@contextlib.contextmanager
+def _library_logs_muted() -> Iterator[None]:
+    def drop(record: logging.LogRecord) -> bool:
+        return False
+
+    loggers = [logging.getLogger(name) for name in _LIBRARY_LOGGERS]
+    for logger in loggers:
+        logger.addFilter(drop)
+    try:
+        yield
+    finally:
+        for logger in loggers:
+            logger.removeFilter(drop)
 
 
 class CommandMode:

@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from particlebot.cli import main
 from particlebot.fleet import (
     FIRST_ID,
     LAST_ID,
@@ -246,3 +247,81 @@ def test_calibration_tables_with_any_names_round_trip(calibration: dict[str, int
     fleet.record(ParticleRecord(5, calibration=calibration))
     loaded = fleet_store._fleet_from(tomllib.loads(render(fleet)))
     assert loaded.particles[5].calibration == calibration
+
+
+# ---- the command ---------------------------------------------------------------------------------
+
+
+def test_fleet_init_makes_a_private_file_and_never_prints_the_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "fleet.toml"
+    assert main(["fleet", "init", "--fleet", str(path), "--pan", "0x1A2B"]) == 0
+    fleet = load_fleet(path)
+    assert fleet.pan_id == 0x1A2B and fleet.channel == 0x0C
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    save_fleet_with_particle(path)
+    assert main(["fleet", "show", "--fleet", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert fleet.key.fingerprint in out
+    assert "0013A20040000042" in out and "0xDCF5A94F" in out
+    assert fleet.key.secret_hex() not in (out + err).upper()
+
+
+def save_fleet_with_particle(path: Path) -> None:
+    with updating_fleet(path) as fleet:
+        fleet.record(
+            ParticleRecord(4, radio_address="0013A20040000042", definition_hash=0xDCF5A94F)
+        )
+
+
+def test_fleet_init_takes_a_key_from_a_file_and_replaces_one_on_request(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "fleet.toml"
+    key_file = tmp_path / "key.txt"
+    key_file.write_text(KEY_HEX.lower() + "\n")
+    assert main(["fleet", "init", "--fleet", str(path), "--key-file", str(key_file)]) == 0
+    assert load_fleet(path).key == FleetKey.from_hex(KEY_HEX)
+    assert main(["fleet", "init", "--fleet", str(path), "--new-key"]) == 0
+    assert load_fleet(path).key != FleetKey.from_hex(KEY_HEX)
+    assert KEY_HEX not in capsys.readouterr().out.upper()
+
+
+@pytest.mark.parametrize(
+    ("key_file_text", "argv", "complaint"),
+    [
+        (KEY_HEX[:30], [], "16 bytes (32 hex digits), not 15"),
+        ("not a key at all", [], "hex digits"),
+        (None, ["--key-file", "missing.txt"], "cannot read the key from"),
+        (None, ["--channel", "0x30"], "channel 0x30"),
+        (None, ["--pan", "0xFFFF"], "PAN id"),
+    ],
+)
+def test_fleet_init_rejects_bad_values_in_one_line(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    key_file_text: str | None,
+    argv: list[str],
+    complaint: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    if key_file_text is not None:
+        Path("key.txt").write_text(key_file_text)
+        argv = ["--key-file", "key.txt"]
+    assert main(["fleet", "init", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and complaint in err, err
+    assert not Path("fleet.toml").exists()
+
+
+def test_fleet_init_over_an_existing_fleet_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "fleet.toml"
+    assert main(["fleet", "init", "--fleet", str(path)]) == 0
+    before = path.read_text()
+    assert main(["fleet", "init", "--fleet", str(path)]) == 2
+    assert "exists already" in capsys.readouterr().err
+    assert path.read_text() == before

@@ -111,14 +111,7 @@ class UsbBench:
         if board.starts_in_bootloader:
             self._start_bootloader(board)
         else:
-            self._show(
-                BoardPort(
-                    self._device(board, "run"),
-                    BoardMode.RUNNING,
-                    board.serial_number,
-                    self._location(board),
-                )
-            )
+            self._show_running(board)
 
     def _unplug(self) -> None:
         board, self.current = self.current, None
@@ -137,20 +130,17 @@ class UsbBench:
             corrupt_flash=board.corrupt_flash,
             on_exit=lambda _: self._bootloader_left(board),
         )
-        self._show(BoardPort(path, BoardMode.BOOTLOADER, None, self._location(board)))
+        self._show(BoardPort(path, BoardMode.BOOTLOADER, None, self.location))
 
     def _bootloader_left(self, board: BenchBoard) -> None:
         with self._lock:
             self._ports = []
         if board.usb_firmware and board is self.current:
-            self._show(
-                BoardPort(
-                    self._device(board, "run"),
-                    BoardMode.RUNNING,
-                    board.serial_number,
-                    self._location(board),
-                )
-            )
+            self._show_running(board)
+
+    def _show_running(self, board: BenchBoard) -> None:
+        device = self._device(board, "run")
+        self._show(BoardPort(device, BoardMode.RUNNING, board.serial_number, self.location))
 
     def _show(self, port: BoardPort) -> None:
         with self._lock:
@@ -158,6 +148,3 @@ class UsbBench:
 
     def _device(self, board: BenchBoard, kind: str) -> str:
         return str(self.directory / f"tty-{board.name}-{kind}")
-
-    def _location(self, board: BenchBoard) -> str | None:
-        return self.location

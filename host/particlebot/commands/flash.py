@@ -23,6 +23,9 @@ class UsageError(ValueError):
     """Options that do not go together."""
 
 
+INTERRUPTED = (
+    "interrupted; a board interrupted while uploading may hold part of the image: flash it again"
+)
 PLUG_IN_HINT = (
     "plug in a Fio v3 (if its firmware has no USB serial, press its reset button after plugging "
     "it in: the bootloader then waits 8 s)"
@@ -86,6 +89,7 @@ def run(
 ) -> int:
     """The command; usb, uploader and timing stand in for the system's in tests."""
     # Imported here, so that building the parser for another command stays quick.
+    from particlebot.firmware import NativeLibraryError, load_library
     from particlebot.provision.avrdude import Avrdude, AvrdudeError
     from particlebot.provision.boards import SystemUsb
     from particlebot.provision.flashing import Flasher
@@ -95,16 +99,28 @@ def run(
     try:
         plan = _plan(args)
         uploader = uploader or Avrdude()
-    except (UsageError, ImageError, FleetFileError, FleetError, AvrdudeError, BootError) as exc:
+        load_library()  # ids are given through the firmware logic: check it loads before a board
+    except (
+        UsageError,
+        ImageError,
+        FleetFileError,
+        FleetError,
+        AvrdudeError,
+        BootError,
+        NativeLibraryError,
+    ) as exc:
         return fail(str(exc))
     usb = usb or SystemUsb()
     flasher = Flasher(usb, uploader, plan, timing=timing)
     if args.many:
         return _flash_many(flasher, args.count)
-    board = _one_board(flasher, usb, args)
-    if isinstance(board, str):
-        return fail(board)
-    outcome = flasher.flash(board)
+    try:
+        board = _one_board(flasher, usb, args)
+        if isinstance(board, str):
+            return fail(board)
+        outcome = flasher.flash(board)
+    except KeyboardInterrupt:
+        return fail(INTERRUPTED)
     print(outcome.line())
     return 0 if outcome.ok else 1
 
@@ -186,6 +202,7 @@ def _flash_many(flasher: Flasher, count: int | None) -> int:
     try:
         flasher.flash_many(count=count)
     except KeyboardInterrupt:
-        print()
+        if flasher.busy:
+            print(INTERRUPTED)
     print(summary(flasher.outcomes))
     return 0 if all(o.ok for o in flasher.outcomes) else 1

@@ -52,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
         fleet = load_fleet(args.fleet)
         if args.particle is not None:
             check_id(args.particle)
+        if args.guard_time < 0:
+            raise FleetError("--guard-time cannot be negative")
     except (FleetFileError, FleetError) as exc:
         return fail(str(exc))
     role = Role.BASE if args.base else Role.PARTICLE

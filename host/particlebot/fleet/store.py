@@ -166,20 +166,21 @@ def _table(document: Mapping[str, Any], name: str, *, required: bool) -> dict[st
 
 
 def _int(table: Mapping[str, Any], name: str, where: str, *, optional: bool = False) -> Any:
-    item = table.get(name)
-    if item is None and optional:
-        return None
-    if not isinstance(item, int) or isinstance(item, bool):
-        raise FleetError(f"{where}: {name} must be an integer")
-    return item
+    return _typed(table, name, where, int, "an integer", optional)
 
 
 def _str(table: Mapping[str, Any], name: str, where: str, *, optional: bool = False) -> Any:
+    return _typed(table, name, where, str, "a string", optional)
+
+
+def _typed(
+    table: Mapping[str, Any], name: str, where: str, kind: type, called: str, optional: bool
+) -> Any:
     item = table.get(name)
     if item is None and optional:
         return None
-    if not isinstance(item, str):
-        raise FleetError(f"{where}: {name} must be a string")
+    if not isinstance(item, kind) or isinstance(item, bool):
+        raise FleetError(f"{where}: {name} must be {called}")
     return item
 
 

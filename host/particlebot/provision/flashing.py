@@ -113,11 +113,14 @@ class Flasher:
         self.say = say
         self.outcomes: list[FlashOutcome] = []
         """Every board flash_many() dealt with, also when it was interrupted."""
+        self.busy = False
+        """A board is being flashed right now."""
 
     # ---- one board ---------------------------------------------------------------------------
 
     def flash(self, board: BoardPort) -> FlashOutcome:
         started = self.timing.clock()
+        self.busy = True
         try:
             target = board
             if board.mode is BoardMode.RUNNING:
@@ -131,6 +134,8 @@ class Flasher:
             FleetFileError,
         ) as exc:
             return FlashOutcome(board.device, error=str(exc), seconds=self._since(started))
+        finally:
+            self.busy = False
 
     def reset_into_bootloader(self, board: BoardPort) -> BoardPort:
         """Touches a running board and waits for its bootloader port."""

@@ -444,15 +444,24 @@ def test_several_boards_without_port_or_many_are_not_guessed_between(
 
 @needs_avrdude
 def test_the_command_flashes_a_board_named_by_port_and_prints_one_line(
-    capsys: pytest.CaptureFixture[str], fleet_path: Path, hex_file: str, tmp_path: Path
+    capsys: pytest.CaptureFixture[str],
+    fleet_path: Path,
+    hex_file: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    # Without the simavr harness the image is flashed all the same, its hash left unrecorded.
+    monkeypatch.setenv("PARTICLEBOT_SIM_HARNESS", str(tmp_path / "no-harness"))
     emulator = CaterinaEmulator(tmp_path / "ttyACM7")
     try:
-        argv = ["--fleet", str(fleet_path), "--firmware", hex_file, "--no-check", "--port"]
-        code, out, err = run_cli([*argv, emulator.port], capsys)
+        argv = ["--fleet", str(fleet_path), "--firmware", hex_file, "--port", emulator.port]
+        code, out, err = run_cli(argv, capsys)
     finally:
         emulator.close()
     assert code == 0, err
-    assert out.startswith("particle 1 (new id) on ") and "flashed and verified" in out
+    first, second = out.splitlines()
+    assert "its definition hash is not recorded" in first and "make firmware harness" in first
+    assert second.startswith("particle 1 (new id) on ") and "flashed and verified" in second
     assert stat.S_IMODE(fleet_path.stat().st_mode) == 0o600
-    assert load_fleet(fleet_path).roster_ids() == [1]
+    record = load_fleet(fleet_path).get(1)
+    assert record is not None and record.definition_hash is None

@@ -76,3 +76,24 @@ def test_a_reflashed_particle_boots_with_its_id_and_its_own_calibration(
     assert booted.particle_id == 6
     record = load_fleet(tmp_path / "fleet.toml").get(6)
     assert record is not None and record.calibration["SERVO_CAL_3"] == 1300
+
+
+def test_an_image_that_does_not_answer_as_a_particle_is_refused_before_any_board(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    not_a_particle = tmp_path / "blink.hex"
+    # A loop at address 0 (rjmp .-2): it runs, and never says a word on Serial1.
+    not_a_particle.write_text(":02000000FFCF30\n:00000001FF\n")
+    fleet_path = tmp_path / "fleet.toml"
+    create_fleet(Fleet.new(), fleet_path)
+    emulator = CaterinaEmulator(tmp_path / "ttyACM0")
+    try:
+        argv = ["flash", "--port", emulator.port, "--fleet", str(fleet_path)]
+        code = main([*argv, "--firmware", str(not_a_particle)])
+    finally:
+        emulator.close()
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "does not behave like a particle firmware" in err
+    assert "--no-check" in err
+    assert emulator.log.commands == []

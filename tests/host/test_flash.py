@@ -197,15 +197,23 @@ def test_many_boards_go_on_past_a_board_that_never_resets_and_one_that_fails_to_
     outcomes = flasher.flash_many(count=4, idle_timeout_s=60)
 
     assert [o.ok for o in outcomes] == [True, False, False, True]
-    assert [o.particle_id for o in outcomes] == [1, None, None, 2]
+    assert [o.particle_id for o in outcomes] == [1, None, None, 3]
     assert "no bootloader appeared" in (outcomes[1].error or "")
     assert "verification mismatch" in (outcomes[2].error or "")
-    assert load_fleet(fleet_path).roster_ids() == [1, 2]
+    # The board whose flash failed to verify had its id written already (avrdude writes the
+    # EEPROM first): id 2 stays reserved for it, so that no other board gets it too.
+    bad_board = bench.finished[2].emulator
+    assert bad_board is not None and identity.id_in(bytes(bad_board.eeprom)) == 2
+    fleet = load_fleet(fleet_path)
+    assert fleet.roster_ids() == [1, 2, 3]
+    reserved = fleet.get(2)
+    assert reserved is not None and reserved.flashed_at is None
+    assert (reserved.note or "").startswith("upload failed (verification mismatch")
     # The first board came back running its new firmware and was not flashed a second time.
     first = bench.finished[0]
     assert first.emulator is not None and first.emulator.log.commands.count("E") == 1
     text = summary(outcomes)
-    assert text.startswith("2 particle(s) flashed (ids 1, 2); 2 failed:")
+    assert text.startswith("2 particle(s) flashed (ids 1, 3); 2 failed:")
     assert "tty-no-bootloader-run" in text and "tty-bad-flash-run" in text
 
 

@@ -1,5 +1,6 @@
-"""An XBee Series 1 emulator on a pty: API mode 1/2 (what digi-xbee needs) or transparent mode,
-with the configuration registers a provisioning tool sets, reads back and writes to flash."""
+"""An XBee Series 1 emulator on a pty: API mode 1/2 (what digi-xbee needs) or transparent mode.
+
+It also keeps the configuration registers a provisioning tool sets, reads back and saves."""
 
 from __future__ import annotations
 

@@ -1,5 +1,7 @@
-"""`particlebot flash` end to end: the real avrdude uploads the real image to an emulated Caterina,
-and what the bootloader holds then boots in simavr with the id the tool gave it."""
+"""`particlebot flash` end to end: real avrdude, emulated Caterina, the result booted in simavr.
+
+The real avrdude uploads the real image to an emulated Caterina, and what the bootloader then
+holds boots in simavr with the id the tool gave it."""
 
 from __future__ import annotations
 

@@ -30,6 +30,9 @@ from particlebot.provision.avrdude import AvrdudeError, EepromEditor, UploadRepo
 from particlebot.provision.boards import BoardError, BoardMode, BoardPort, UsbBus
 from particlebot.provision.image import FirmwareImage
 
+UPLOAD_FAILED_NOTE = "upload failed"
+"""How the note of an id reserved for a board whose upload failed begins."""
+
 
 class Uploader(Protocol):
     """Writes an image to a board in its bootloader (provision.avrdude.Avrdude)."""
@@ -160,6 +163,7 @@ class Flasher:
 
     def _upload(self, board: BoardPort, target: BoardPort, started: float) -> FlashOutcome:
         plan = self.plan
+        failure: AvrdudeError | None = None
         with updating_fleet(plan.fleet_path) as fleet:
             chosen: dict[str, int | str] = {}
 
@@ -167,17 +171,41 @@ class Flasher:
                 current = identity.id_in(before)
                 particle_id, source = choose_id(fleet, current, plan)
                 chosen.update(id=particle_id, source=source)
-                return before if particle_id == current else identity.with_id(before, particle_id)
+                if particle_id == current:
+                    return before
+                chosen["written"] = particle_id
+                return identity.with_id(before, particle_id)
 
-            report = self.uploader.upload(target.device, plan.image.path, edit)
-            particle_id = int(chosen["id"])
-            record = fleet.get(particle_id) or ParticleRecord(particle_id)
-            record.board_serial = board.serial_number or target.serial_number or record.board_serial
-            record.definition_hash = plan.definition_hash
-            record.image_sha256 = plan.image.sha256
-            record.flashed_at = self.timing.now()
-            record.calibration = identity.calibration(report.eeprom_after)
-            fleet.record(record)
+            try:
+                report = self.uploader.upload(target.device, plan.image.path, edit)
+            except AvrdudeError as exc:
+                # avrdude writes the EEPROM before the flash: a board whose flash then failed
+                # may hold its new id already. The id stays reserved, so that the next board
+                # does not get it too.
+                failure = exc
+                reserved = chosen.get("written")
+                if isinstance(reserved, int) and fleet.get(reserved) is None:
+                    note = (
+                        f"{UPLOAD_FAILED_NOTE} ({exc}); the board may hold this id: flash it again"
+                    )
+                    fleet.record(
+                        ParticleRecord(reserved, board_serial=board.serial_number, note=note)
+                    )
+            else:
+                particle_id = int(chosen["id"])
+                record = fleet.get(particle_id) or ParticleRecord(particle_id)
+                record.board_serial = (
+                    board.serial_number or target.serial_number or record.board_serial
+                )
+                record.definition_hash = plan.definition_hash
+                record.image_sha256 = plan.image.sha256
+                record.flashed_at = self.timing.now()
+                record.calibration = identity.calibration(report.eeprom_after)
+                if record.note and record.note.startswith(UPLOAD_FAILED_NOTE):
+                    record.note = None
+                fleet.record(record)
+        if failure is not None:
+            raise failure
         return FlashOutcome(
             target.device,
             particle_id=particle_id,

@@ -1,5 +1,7 @@
-"""Boot a raw flash image (what a bootloader holds, or an Intel HEX file's bytes) in simavr and ask
-it who it is: the STATUS it answers a PING with carries its id and protocol definition hash."""
+"""Boot a raw flash image in simavr and ask it who it is: its id and protocol definition hash.
+
+The image is what a bootloader holds, or an Intel HEX file's bytes; the STATUS it answers a PING
+with carries both."""
 
 from __future__ import annotations
 

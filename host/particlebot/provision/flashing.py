@@ -163,7 +163,7 @@ class Flasher:
 
     def _upload(self, board: BoardPort, target: BoardPort, started: float) -> FlashOutcome:
         plan = self.plan
-        failure: AvrdudeError | None = None
+        failure: AvrdudeError | KeyboardInterrupt | None = None
         with updating_fleet(plan.fleet_path) as fleet:
             chosen: dict[str, int | str] = {}
 
@@ -178,15 +178,16 @@ class Flasher:
 
             try:
                 report = self.uploader.upload(target.device, plan.image.path, edit)
-            except AvrdudeError as exc:
-                # avrdude writes the EEPROM before the flash: a board whose flash then failed
-                # may hold its new id already. The id stays reserved, so that the next board
-                # does not get it too.
+            except (AvrdudeError, KeyboardInterrupt) as exc:
+                # avrdude writes the EEPROM before the flash: a board whose flash then failed (or
+                # was interrupted) may hold its new id already. The id stays reserved, so that
+                # the next board does not get it too.
                 failure = exc
                 reserved = chosen.get("written")
                 if isinstance(reserved, int) and fleet.get(reserved) is None:
+                    why = str(exc) or "interrupted"
                     note = (
-                        f"{UPLOAD_FAILED_NOTE} ({exc}); the board may hold this id: flash it again"
+                        f"{UPLOAD_FAILED_NOTE} ({why}); the board may hold this id: flash it again"
                     )
                     fleet.record(
                         ParticleRecord(reserved, board_serial=board.serial_number, note=note)

@@ -184,7 +184,7 @@ def _one_board(flasher: Flasher, usb: UsbBus, args: argparse.Namespace) -> Board
     if len(boards) > 1:
         names = ", ".join(f"{b.device} ({b.mode.value})" for b in boards)
         return f"{len(boards)} Fio v3 boards found ({names}): name one with --port, or use --many"
-    if not boards:
+    if not boards and args.wait > 0:
         print(f"Waiting up to {args.wait:.0f} s for a board: {PLUG_IN_HINT}")
     found = flasher.wait_for_board(args.wait)
     if found is None:

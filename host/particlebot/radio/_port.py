@@ -24,7 +24,7 @@ def translate_open_error(port: str, exc: BaseException) -> RadioError:
     text = str(exc)
     if code == errno.ENOENT or "No such file" in text or "FileNotFoundError" in text:
         return PortNotFoundError(
-            f"No serial port {port}. Plug in the base-station XBee (XBee Explorer) and check the "
+            f"No serial port {port}. Plug in the XBee (in its XBee Explorer) and check the "
             f"name; {LIST_PORTS_HINT}"
         )
     if code in (errno.EACCES, errno.EPERM) or "Permission denied" in text:

@@ -77,7 +77,9 @@ def model(sink: Sink, clock: ManualClock) -> ConsoleModel:
 
 
 def hear(model: ConsoleModel, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
+    """The frame arrives; then the console's next poll (at the same moment) looks at it."""
     model.on_frame(ReceivedFrame(clock(), source, decode_frame(raw)))
+    model.poll()
 
 
 def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualClock) -> None:

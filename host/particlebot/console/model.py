@@ -240,7 +240,8 @@ class ConsoleModel(Listener):
             elif isinstance(message, ParamValue):
                 row.params[message.param] = (message.result, message.value)
                 self._note(_param_text(row.id, message))
-        self.poll(received.time)
+        # Campaigns advance in poll(), on the caller's thread: commands never go out from the
+        # receive thread, which must keep reading the radio.
 
     def _on_status(self, row: ParticleRow, status: Status, at: float) -> None:
         first_mismatch = status.definition_hash != self.host_hash and (

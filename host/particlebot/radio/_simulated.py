@@ -6,7 +6,7 @@ import queue
 from abc import abstractmethod
 from typing import Generic, Protocol, TypeVar
 
-from particlebot.radio import InvalidRadioUrlError, Packet, Radio, RadioUrl
+from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
 from particlebot.virtual.light import Lamp
 
 
@@ -53,6 +53,9 @@ class SimulatedSwarm(Protocol):
 
     def stop(self) -> None: ...
 
+    @property
+    def error(self) -> BaseException | None: ...
+
 
 SwarmT = TypeVar("SwarmT", bound=SimulatedSwarm)
 
@@ -61,6 +64,9 @@ class SwarmRadio(Radio, Generic[SwarmT]):
     """The base station's radio on a simulated swarm's air. The simulation's thread hands packets
     over through a queue; the clock is the simulation's, so the console's ages and timeouts
     follow simulated time when it runs faster or slower than real time."""
+
+    restart_advice = "open it again"
+    """What to do once the simulation has failed (a backend names what to rebuild)."""
 
     def __init__(self, swarm: SwarmT, *, url: str, speed: float | None = None) -> None:
         """speed: step the swarm on its own thread at this pace (else the caller steps it)."""
@@ -82,7 +88,12 @@ class SwarmRadio(Radio, Generic[SwarmT]):
         )
 
     def _check(self) -> None:
-        """Raises RadioError when the simulation can no longer run (nothing to check here)."""
+        """Raises RadioError once the simulation's thread has failed: without it nothing more will
+        ever be heard, and a radio that just stays quiet would look like a silent swarm."""
+        error = self.swarm.error
+        if error is not None:
+            self._set_link(LinkState.LOST, f"the simulation stopped: {error}")
+            raise RadioError(f"The simulated swarm stopped ({error}); {self.restart_advice}")
 
     def now(self) -> float:
         return self.swarm.epoch()

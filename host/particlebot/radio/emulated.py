@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Self
 
-from particlebot.radio import InvalidRadioUrlError, LinkState, RadioError, RadioUrl
+from particlebot.radio import InvalidRadioUrlError, RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
 from particlebot.sim.harness import HarnessError
 from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
@@ -63,6 +63,8 @@ def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
 class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
     """The base station's radio on an EmulatedSwarm's air."""
 
+    restart_advice = "rebuild with `make firmware harness` and open it again"
+
     def __init__(
         self,
         swarm: EmulatedSwarm,
@@ -91,15 +93,6 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
                 "Run: make firmware harness (after `make system-deps` for the AVR tools)"
             ) from exc
         return cls(swarm, url=url.text, speed=speed, owns_swarm=True)
-
-    def _check(self) -> None:
-        error = self.swarm.error
-        if error is not None:
-            self._set_link(LinkState.LOST, f"the emulation stopped: {error}")
-            raise RadioError(
-                f"The emulated swarm stopped ({error}); rebuild with `make firmware harness` "
-                "and open it again"
-            )
 
     def close(self) -> None:
         if self._owns_swarm:

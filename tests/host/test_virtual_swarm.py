@@ -144,7 +144,7 @@ def test_url_options_place_the_lamp_and_the_line() -> None:
         ("virtual://ten", "number of particles"),
         ("virtual://0", "1..200"),
         ("virtual://3?lamp=1,2", "lamp=X,Y,H"),
-        ("virtual://3?speed=-1", "positive"),
+        ("virtual://3?speed=-1", "speed must be a number > 0 or max"),
         ("virtual://3?colour=red", "unknown option"),
     ],
 )

@@ -31,6 +31,11 @@ class Station:
         return None if self.log is None else self.log.path
 
 
+def has_terminal() -> bool:
+    """Whether a person sits at this process: keys can come in and a screen can be drawn."""
+    return sys.stdin.isatty() and sys.stdout.isatty()
+
+
 def fail(message: str) -> int:
     print(f"particlebot: {message}", file=sys.stderr)
     return 2

@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from particlebot.commands._common import fail, run_headless, sigterm_as_interrupt, station
+from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError
 
 
@@ -38,5 +39,5 @@ def run(args: argparse.Namespace) -> int:
                 return run_headless(base.model, until, report=report)
             except KeyboardInterrupt:
                 return 0
-    except RadioError as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))

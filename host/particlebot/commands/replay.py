@@ -4,24 +4,24 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
-from particlebot.commands._common import fail, run_headless, station
+from particlebot.commands._common import fail, has_terminal, run_headless, station
 from particlebot.console.app import ConsoleApp
 from particlebot.console.model import state_name
-from particlebot.logs.jsonl import LogFormatError
+from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
 from particlebot.radio import RadioError
 
 
 def run(args: argparse.Namespace) -> int:
-    speed = math.inf if args.speed == "max" else float(args.speed)
+    ui = not args.no_ui and has_terminal()
+    # Without a console nobody watches the pace: as fast as possible unless asked otherwise.
+    speed = args.speed if args.speed is not None else (1.0 if ui else math.inf)
     try:
         radio = ReplayRadio(Path(args.log), speed)
-    except (RadioError, LogFormatError) as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))
-    ui = not args.no_ui and sys.stdout.isatty()
     with station(radio, None) as base:
         if ui:
             announced = False

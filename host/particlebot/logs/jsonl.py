@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import json
+import math
 import os
 import threading
 import time
@@ -67,8 +68,14 @@ class JsonlWriter(Listener):
         self.fsync = fsync
         self.lines = 0
         self._lock = threading.Lock()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self._fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        except OSError as exc:
+            raise LogError(
+                f"cannot write the session log {path} ({exc.strerror or exc}); give --log-dir "
+                "a folder you can write to"
+            ) from None
         self.write(
             {
                 "kind": "session",
@@ -135,15 +142,28 @@ class JsonlWriter(Listener):
             os.close(fd)
 
 
-class LogFormatError(ValueError):
-    pass
+class LogError(Exception):
+    """A log that cannot be written or read; the message names the file and says why."""
 
 
-def read_log(path: Path) -> Iterator[Record]:
-    """Records of a log in order. A torn last line (power cut without fsync) is skipped; a bad
-    line anywhere else raises LogFormatError naming it."""
-    with path.open("rb") as file:
-        lines = file.read().split(b"\n")
+class LogFormatError(LogError, ValueError):
+    """A line of a log that is not what the format says."""
+
+
+def read_numbered(path: Path) -> Iterator[tuple[int, Record]]:
+    """(line number, record) of a log in order. A torn last line (power cut without fsync) is
+    skipped; a bad line anywhere else raises LogFormatError naming it, and a file that cannot be
+    read LogError."""
+    try:
+        if not path.exists():
+            raise LogError(f"no log file {path}")
+        if not path.is_file():
+            # A directory cannot be read as a log, and a FIFO or device would block or never end.
+            raise LogError(f"cannot read the log {path}: not a regular file")
+        with path.open("rb") as file:
+            lines = file.read().split(b"\n")
+    except OSError as exc:
+        raise LogError(f"cannot read the log {path}: {exc.strerror or exc}") from None
     last = len(lines) - 1
     for number, line in enumerate(lines, start=1):
         if not line.strip():
@@ -156,4 +176,70 @@ def read_log(path: Path) -> Iterator[Record]:
             raise LogFormatError(f"{path}:{number}: not a JSON object ({exc})") from exc
         if not isinstance(record, dict):
             raise LogFormatError(f"{path}:{number}: not a JSON object")
+        yield number, record
+
+
+def read_log(path: Path) -> Iterator[Record]:
+    """The records of a log in order (see read_numbered)."""
+    for _, record in read_numbered(path):
         yield record
+
+
+def load_log(path: Path) -> list[tuple[int, Record]]:
+    """Every (line number, record) of a log; LogError if it holds none (an empty file, or one a
+    power cut left full of NUL bytes), since nothing can be made of it."""
+    records = list(read_numbered(path))
+    if not records:
+        raise LogError(f"{path} holds no log records (empty, or not a particlebot log)")
+    return records
+
+
+class RecordReader:
+    """Typed access to one record's keys; a key of the wrong type raises LogFormatError naming
+    the file, line and key, so a damaged log is reported instead of crashing its reader."""
+
+    def __init__(self, path: Path, number: int, record: Record) -> None:
+        self.where = f"{path}:{number}"
+        self.record = record
+
+    def _wrong(self, key: str, wanted: str) -> LogFormatError:
+        value = json.dumps(self.record.get(key))
+        return LogFormatError(f"{self.where}: '{key}' must be {wanted}, not {value[:40]}")
+
+    def number(self, key: str) -> float:
+        value = self.record.get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self._wrong(key, "a number")
+        if not math.isfinite(value):
+            raise self._wrong(key, "a finite number")
+        return float(value)
+
+    def integer(self, key: str) -> int:
+        value = self.record.get(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self._wrong(key, "a whole number")
+        return value
+
+    def text(self, key: str) -> str:
+        value = self.record.get(key)
+        if not isinstance(value, str):
+            raise self._wrong(key, "a string")
+        return value
+
+    def optional_text(self, key: str) -> str | None:
+        return None if self.record.get(key) is None else self.text(key)
+
+    def hex_bytes(self, key: str) -> bytes:
+        value = self.record.get(key)
+        try:
+            if not isinstance(value, str):
+                raise ValueError
+            return bytes.fromhex(value)
+        except ValueError:
+            raise self._wrong(key, "bytes in hex (an even number of 0-9, a-f)") from None
+
+    def fields(self) -> dict[str, Any]:
+        value = self.record.get("fields", {})
+        if not isinstance(value, dict):
+            raise self._wrong("fields", "an object of named fields")
+        return value

@@ -6,6 +6,7 @@ import queue
 from abc import abstractmethod
 from typing import Generic, Protocol, TypeVar
 
+from particlebot.options import POSITIVE, OptionError, parse_float
 from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
 from particlebot.virtual.light import Lamp
 
@@ -28,15 +29,17 @@ def parse_lamp(url: RadioUrl) -> Lamp:
     """lamp=X,Y,H in metres, or the default lamp."""
     if "lamp" not in url.options:
         return Lamp()
+    parts = url.options["lamp"].split(",")
     try:
-        parts = [float(p) for p in url.options["lamp"].split(",")]
-    except ValueError:
-        parts = []
-    if len(parts) != 3 or parts[2] <= 0:
+        if len(parts) != 3:
+            raise OptionError("three numbers")
+        x, y = (parse_float(part) for part in parts[:2])
+        height = parse_float(parts[2], POSITIVE)
+    except OptionError:
         raise InvalidRadioUrlError(
             f"{url.text}: lamp=X,Y,H in metres, H above the photocells, e.g. lamp=0,0,0.28"
-        )
-    return Lamp(parts[0], parts[1], parts[2])
+        ) from None
+    return Lamp(x, y, height)
 
 
 class SimulatedSwarm(Protocol):

@@ -11,7 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Self
 
-from particlebot.radio import InvalidRadioUrlError, RadioError, RadioUrl
+from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds
+from particlebot.radio import RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
 from particlebot.sim.harness import HarnessError
 from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
@@ -34,28 +35,22 @@ MAX_PARTICLES = 32
 
 def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
     url.check_options(OPTIONS)
-    loss = url.get_float("loss", 0.0)
-    if not 0.0 <= loss < 1.0:
-        raise InvalidRadioUrlError(f"{url.text}: loss is a probability below 1, e.g. loss=0.2")
-    delay_ms = url.get_float("delay_ms", 0.0)
-    if delay_ms < 0:
-        raise InvalidRadioUrlError(f"{url.text}: delay_ms cannot be negative")
+    # A loss of 1 would leave nothing to hear: the console could never confirm a command.
+    loss = url.get_float("loss", 0.0, Bounds(minimum=0, below=1))
+    delay_ms = url.get_float("delay_ms", 0.0, NON_NEGATIVE)
     elf = Path(url.options["elf"]) if "elf" in url.options else None
-    base_baud = url.get_int("base_baud", 9600)
-    buffer = url.get_int("buffer", 256)
-    if base_baud <= 0 or buffer < 100:
-        raise InvalidRadioUrlError(f"{url.text}: base_baud > 0 and buffer >= 100 bytes")
     return SwarmConfig(
         count=parse_count(url, default=5, maximum=MAX_PARTICLES),
         lamp=parse_lamp(url),
-        start=url.get_float("start", 0.10),
-        spacing=url.get_float("spacing", 0.155),
+        start=url.get_float("start", 0.10, NON_NEGATIVE),
+        spacing=url.get_float("spacing", 0.155, POSITIVE),
         loss=loss,
         delay_us=delay_ms * 1000,
-        seed=url.get_int("seed", 1),
+        seed=url.get_int("seed", 1, NON_NEGATIVE),
         elf=elf,
-        base_baud=base_baud,
-        buffer_bytes=buffer,
+        base_baud=url.get_int("base_baud", 9600, POSITIVE),
+        # A whole 100-byte RF packet must fit, or the radio could never pass one on.
+        buffer_bytes=url.get_int("buffer", 256, Bounds(minimum=100)),
         keep_history=False,
     )
 

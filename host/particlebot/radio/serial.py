@@ -9,6 +9,7 @@ from typing import Self
 
 import serial
 
+from particlebot.options import POSITIVE
 from particlebot.radio import (
     InvalidRadioUrlError,
     LinkState,
@@ -64,9 +65,9 @@ class SerialRadio(Radio):
             )
         return cls(
             url.target,
-            url.get_int("baud", 9600),
+            url.get_int("baud", 9600, POSITIVE),
             url=url.text,
-            retry_s=url.get_float("retry", 0.5),
+            retry_s=url.get_float("retry", 0.5, POSITIVE),
         )
 
     def send(self, data: bytes) -> None:

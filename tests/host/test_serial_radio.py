@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from particlebot.commands._common import open_station
 from particlebot.radio import (
     LinkEvent,
     LinkState,
@@ -114,3 +115,12 @@ def test_closing_while_lost_does_not_hang(pty: VanishingPty) -> None:
     radio.close()
     assert radio.receive(timeout=0.2) is None
     assert not os.path.exists(pty.path)
+
+
+def test_a_console_on_a_silent_port_is_told_what_to_check(pty: VanishingPty) -> None:
+    base = open_station(f"serial://{pty.path}?baud=19200", None)
+    try:
+        hint = base.model.quiet_hint or ""
+        assert "19200 baud" in hint and "PAN ID" in hint and "channel" in hint
+    finally:
+        base.session.close()

@@ -51,7 +51,7 @@ def open_station(radio: Radio | str, log_dir: Path | None, *, fsync: bool = Fals
         if log_dir is not None:
             log = JsonlWriter(default_log_path(log_dir), radio=radio.url, fsync=fsync)
             session.add_listener(log)
-        model = ConsoleModel(session, radio.now)
+        model = ConsoleModel(session, radio.now, quiet_hint=radio.quiet_hint)
         session.add_listener(model)
     except BaseException:
         radio.close()

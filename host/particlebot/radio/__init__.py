@@ -224,6 +224,11 @@ class Radio(ABC):
         return time.time()
 
     @property
+    def quiet_hint(self) -> str | None:
+        """What to check when this radio hears nothing at all (None: nothing to suggest)."""
+        return None
+
+    @property
     def link_state(self) -> LinkState:
         return self._link_state
 

@@ -70,6 +70,14 @@ class SerialRadio(Radio):
             retry_s=url.get_float("retry", 0.5, POSITIVE),
         )
 
+    @property
+    def quiet_hint(self) -> str | None:
+        return (
+            f"Check that the base XBee's serial rate is {self.baud} baud (BD=3 is 9600; "
+            f"otherwise add ?baud=N to the URL), that it has the particles' PAN ID (ID) and "
+            "channel (CH), and that the particles are switched on."
+        )
+
     def send(self, data: bytes) -> None:
         with self._lock:
             port = self._serial

@@ -198,6 +198,14 @@ class XBeeRadio(Radio):
             retry_s=url.get_float("retry", 1.0, POSITIVE),
         )
 
+    @property
+    def quiet_hint(self) -> str | None:
+        return (
+            f"Check that the base XBee's serial rate is {self.baud} baud (BD=3 is 9600; "
+            f"otherwise add ?baud=N to the URL), that it has the particles' PAN ID (ID) and "
+            "channel (CH), and that the particles are switched on."
+        )
+
     def _open_device(self) -> _Raw802WithoutLookups:
         self.api_mode = probe_mode(
             self.port, self.baud, api_timeout=self.probe_timeout, guard_s=self.guard_s

@@ -33,7 +33,13 @@ def run(args: argparse.Namespace) -> int:
                     base.model.note(f"Replay of {args.log} finished; q quits")
                 return None
 
-            app = ConsoleApp(base.model, radio_name=radio.url, log_path=str(args.log), on_tick=tick)
+            app = ConsoleApp(
+                base.model,
+                radio_name=radio.url,
+                log_path=str(args.log),
+                on_tick=tick,
+                read_only=True,
+            )
             try:
                 return app.run() or 0
             except KeyboardInterrupt:

@@ -92,6 +92,25 @@ def build_parser() -> argparse.ArgumentParser:
     plot = commands.add_parser("plot", help="draw a log as a PNG: radius, state, intensity")
     plot.add_argument("log", help="a .jsonl session log")
     plot.add_argument("-o", "--output", help="PNG file (default: next to the log)")
+    plot.add_argument(
+        "--run",
+        type=int_arg(Bounds(minimum=1, maximum=255)),
+        help="only this run: from its START to the next one",
+    )
+    plot.add_argument(
+        "--from",
+        dest="start",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="from S seconds after the session started (as on the time axis)",
+    )
+    plot.add_argument(
+        "--to",
+        dest="end",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="up to S seconds after the session started",
+    )
 
     replay = commands.add_parser("replay", help="feed a log back through the console")
     replay.add_argument("log", help="a .jsonl session log")

@@ -88,6 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=message_type,
         help="only this message type (STATUS, ...); repeatable",
     )
+    export.add_argument("--notes", action="store_true", help="add the console's notes, a row each")
 
     plot = commands.add_parser("plot", help="draw a log as a PNG: radius, state, intensity")
     plot.add_argument("log", help="a .jsonl session log")

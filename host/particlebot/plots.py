@@ -217,8 +217,8 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
     """Per-particle STATUS series and the commands sent. Particles come ordered by their latest
     S_n (nearest the light first), those never estimated last, ties by id."""
     notes = list(warnings)
-    # The "end" record is stamped with the host's wall clock, which a sped-up virtual radio's
-    # clock outruns, so it is no guide to when the session's frames happened.
+    # Logs written before the end record took the session's clock stamped it with the host's wall
+    # clock, which a sped-up virtual radio's clock outruns: it is no guide to when frames came.
     timed = [(t, r) for r in records if r.get("kind") != "end" and (t := _time(r)) is not None]
     if not timed:
         raise PlotInputError("the log holds no timed records")

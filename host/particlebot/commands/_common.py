@@ -49,7 +49,9 @@ def open_station(radio: Radio | str, log_dir: Path | None, *, fsync: bool = Fals
         session = Session(radio)
         log = None
         if log_dir is not None:
-            log = JsonlWriter(default_log_path(log_dir), radio=radio.url, fsync=fsync)
+            log = JsonlWriter(
+                default_log_path(log_dir), radio=radio.url, fsync=fsync, clock=radio.now
+            )
             session.add_listener(log)
         model = ConsoleModel(session, radio.now, quiet_hint=radio.quiet_hint)
         session.add_listener(model)

@@ -14,6 +14,10 @@ from particlebot.logs.replay import ReplayRadio
 from particlebot.radio import RadioError
 
 
+PROGRESS_EVERY_S = 2.0
+"""How often a replay without the console says how far it got."""
+
+
 def run(args: argparse.Namespace) -> int:
     ui = not args.no_ui and has_terminal()
     # Without a console nobody watches the pace: as fast as possible unless asked otherwise.
@@ -44,8 +48,24 @@ def run(args: argparse.Namespace) -> int:
                 return app.run() or 0
             except KeyboardInterrupt:
                 return 0
+        pace = "as fast as possible" if math.isinf(speed) else f"at {speed:g}x real time"
+        print(
+            f"Replaying {radio.total_packets} packets ({radio.span_s:.1f} s of log) from "
+            f"{args.log} {pace}",
+            flush=True,
+        )
+
+        def progress() -> None:
+            done = radio.position_s / radio.span_s if radio.span_s > 0 else 1.0
+            print(f"  {done:4.0%}  {radio.position_s:.1f} of {radio.span_s:.1f} s", flush=True)
+
         try:
-            run_headless(base.model, lambda: 0 if radio.finished else None)
+            run_headless(
+                base.model,
+                lambda: 0 if radio.finished else None,
+                report=progress,
+                report_every_s=PROGRESS_EVERY_S,
+            )
         except KeyboardInterrupt:
             return 0
         # Let the receive thread hand over the last packets before summarising.

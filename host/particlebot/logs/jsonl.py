@@ -9,7 +9,7 @@ import math
 import os
 import threading
 import time
-from collections.abc import Hashable, Iterator
+from collections.abc import Callable, Hashable, Iterator
 from pathlib import Path
 from typing import Any, cast
 
@@ -63,9 +63,21 @@ class JsonlWriter(Listener):
     file, so a crash or a kill leaves every earlier line whole; fsync=True also survives a power
     cut, at the cost of a disk sync per line."""
 
-    def __init__(self, path: Path, *, radio: str = "", fsync: bool = False) -> None:
+    def __init__(
+        self,
+        path: Path,
+        *,
+        radio: str = "",
+        fsync: bool = False,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        """clock: the session's clock (the radio's), which stamps records that carry no time of
+        their own; a simulated radio's runs ahead of the wall clock when sped up."""
         self.path = path
         self.fsync = fsync
+        self.clock = clock
+        self.latest = -math.inf
+        """The latest time written: the end record is never stamped before it."""
         self.lines = 0
         self._lock = threading.Lock()
         try:
@@ -88,11 +100,13 @@ class JsonlWriter(Listener):
         )
 
     def write(self, record: Record, at: float | None = None) -> None:
-        line = {"t": round(time.time() if at is None else at, 6), **record}
+        t = round(self.clock() if at is None else at, 6)
+        line = {"t": t, **record}
         data = (json.dumps(line, separators=(",", ":")) + "\n").encode()
         with self._lock:
             if self._fd is None:
                 return
+            self.latest = max(self.latest, t)
             os.write(self._fd, data)
             if self.fsync:
                 os.fsync(self._fd)
@@ -135,7 +149,13 @@ class JsonlWriter(Listener):
         self.write({"kind": "note", "text": note.text}, note.time)
 
     def on_close(self) -> None:
-        self.write({"kind": "end", "lines": self.lines + 1})
+        # Records arrive from several threads, each stamped when it happened: the last one can be
+        # stamped a little after the clock reads now. The end stays the end.
+        ended = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+        self.write(
+            {"kind": "end", "lines": self.lines + 1, "ended": ended},
+            max(self.clock(), self.latest),
+        )
         with self._lock:
             fd, self._fd = self._fd, None
         if fd is not None:

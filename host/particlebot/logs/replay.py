@@ -62,6 +62,16 @@ class ReplayRadio(Radio):
         return self._next >= len(self._items)
 
     @property
+    def span_s(self) -> float:
+        """Seconds of the log from its first to its last replayed item."""
+        return self._items[-1][0] - self.start_time if self._items else 0.0
+
+    @property
+    def position_s(self) -> float:
+        """How far into span_s the replay has got."""
+        return self._clock - self.start_time
+
+    @property
     def total_packets(self) -> int:
         return sum(1 for _, item in self._items if isinstance(item, Packet))
 

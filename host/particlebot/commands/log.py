@@ -23,6 +23,11 @@ def run(args: argparse.Namespace) -> int:
             deadline = None if args.duration is None else time.monotonic() + args.duration
 
             def until() -> int | None:
+                # Without a console, warnings (a silent port, a reset, a foreign firmware) would
+                # go unseen until someone reads the log.
+                for note in base.model.new_notes():
+                    if note.level != "info":
+                        print(f"{note.level}: {note.text}", flush=True)
                 if base.session.error is not None:
                     return fail(str(base.session.error))
                 if deadline is not None and time.monotonic() >= deadline:

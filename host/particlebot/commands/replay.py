@@ -13,7 +13,6 @@ from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
 from particlebot.radio import RadioError
 
-
 PROGRESS_EVERY_S = 2.0
 """How often a replay without the console says how far it got."""
 

@@ -268,7 +268,7 @@ class ConsoleModel(Listener):
         max_pings: int = MAX_PINGS,
         param_timeout: float = PARAM_REPLY_TIMEOUT_S,
         quiet_hint: str | None = None,
-        quiet_after: float = QUIET_HINT_S,
+        quiet_after: float | None = None,
     ) -> None:
         """quiet_hint: shown once when nothing at all has been heard for quiet_after seconds (what
         to check on this kind of radio: its baud, PAN ID and channel)."""
@@ -286,7 +286,7 @@ class ConsoleModel(Listener):
         self.max_pings = max_pings
         self.param_timeout = param_timeout
         self.quiet_hint = quiet_hint
-        self.quiet_after = quiet_after
+        self.quiet_after = QUIET_HINT_S if quiet_after is None else quiet_after
         self.opened_at = clock()
         self.queries: list[ParamQuery] = []
         self.run_active = False

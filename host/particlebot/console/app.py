@@ -157,10 +157,10 @@ class ConfirmScreen(ModalScreen[str]):
         self.choices = choices
 
     def compose(self) -> ComposeResult:
-        lines = Text()
-        for key, text, _ in [*self.choices, ("Esc", "cancel", "cancel")]:
-            lines.append(f"{key:>3}", style="bold")
-            lines.append(f"  {text}\n")
+        lines = Text("\n").join(
+            Text.assemble((f"{key:>3}", "bold"), f"  {text}")
+            for key, text, _ in [*self.choices, ("Esc", "cancel", "cancel")]
+        )
         with Vertical(id="dialog"):
             yield Static(Text(self.question, style="bold"), id="question")
             yield Static(lines, id="choices")

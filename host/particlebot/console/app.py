@@ -410,15 +410,13 @@ class ConsoleApp(App[int]):
             elif answer == "quit":
                 self.exit(0)
 
-        self.push_screen(
-            ConfirmScreen(
-                f"Particle{'s' if len(moving) > 1 else ''} {ids_text(moving)} "
-                f"{'are' if len(moving) > 1 else 'is'} in a run. Send STOP before quitting?",
-                [
-                    ("y", "send STOP, then quit once they confirm it", "stop"),
-                    ("n", "quit and leave them running", "quit"),
-                ],
-            ),
+        self._ask_about_run(
+            moving,
+            "Send STOP before quitting?",
+            [
+                ("y", "send STOP, then quit once they confirm it", "stop"),
+                ("n", "quit and leave them running", "quit"),
+            ],
             answered,
         )
 
@@ -454,19 +452,29 @@ class ConsoleApp(App[int]):
                 else:
                     self._write("START not sent; the run goes on", "yellow")
 
-            self.push_screen(
-                ConfirmScreen(
-                    f"Particle{'s' if len(moving) > 1 else ''} {ids_text(moving)} "
-                    f"{'are' if len(moving) > 1 else 'is'} in a run. Restart with this START?",
-                    [
-                        ("y", "restart: each particle estimates afresh and starts over", "restart"),
-                        ("n", "keep the run going", "cancel"),
-                    ],
-                ),
+            self._ask_about_run(
+                moving,
+                "Restart with this START?",
+                [
+                    ("y", "restart: each particle estimates afresh and starts over", "restart"),
+                    ("n", "keep the run going", "cancel"),
+                ],
                 answered,
             )
             return
         self._carry_out(prepared)
+
+    def _ask_about_run(
+        self,
+        moving: list[int],
+        question: str,
+        choices: list[tuple[str, str, str]],
+        answered: Callable[[str | None], None],
+    ) -> None:
+        """Asks, naming the particles in a run, what to do about them."""
+        many = len(moving) > 1
+        who = f"Particle{'s' if many else ''} {ids_text(moving)} {'are' if many else 'is'}"
+        self.push_screen(ConfirmScreen(f"{who} in a run. {question}", choices), answered)
 
     def _carry_out(self, prepared: Prepared) -> None:
         reply = prepared.run()

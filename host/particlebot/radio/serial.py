@@ -18,7 +18,7 @@ from particlebot.radio import (
     Radio,
     RadioUrl,
 )
-from particlebot.radio._port import open_serial, port_present
+from particlebot.radio._port import open_serial, port_present, quiet_hint
 
 # API frame types an XBee 802.15.4 radio emits towards its host; used only to warn that a radio
 # is in API mode while being read as transparent.
@@ -72,11 +72,7 @@ class SerialRadio(Radio):
 
     @property
     def quiet_hint(self) -> str | None:
-        return (
-            f"Check that the base XBee's serial rate is {self.baud} baud (BD=3 is 9600; "
-            f"otherwise add ?baud=N to the URL), that it has the particles' PAN ID (ID) and "
-            "channel (CH), and that the particles are switched on."
-        )
+        return quiet_hint(self.baud)
 
     def send(self, data: bytes) -> None:
         with self._lock:

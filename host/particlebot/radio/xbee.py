@@ -28,7 +28,7 @@ from particlebot.radio import (
     RadioUrl,
     WrongModeError,
 )
-from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present
+from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present, quiet_hint
 
 _log = logging.getLogger(__name__)
 
@@ -200,11 +200,7 @@ class XBeeRadio(Radio):
 
     @property
     def quiet_hint(self) -> str | None:
-        return (
-            f"Check that the base XBee's serial rate is {self.baud} baud (BD=3 is 9600; "
-            f"otherwise add ?baud=N to the URL), that it has the particles' PAN ID (ID) and "
-            "channel (CH), and that the particles are switched on."
-        )
+        return quiet_hint(self.baud)
 
     def _open_device(self) -> _Raw802WithoutLookups:
         self.api_mode = probe_mode(

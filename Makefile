@@ -244,6 +244,7 @@ test: system-deps venv check-generated lint cpp-test pytest
 
 demo: system-deps venv native
 	$(VENV)/bin/particlebot demo
+	@echo "particlebot and pio are in $(VENV)/bin: run '. $(VENV)/bin/activate' to call them by name"
 
 bench: venv native firmware firmware-faults harness
 	$(VPY) tools/bench.py

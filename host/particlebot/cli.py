@@ -7,8 +7,12 @@ import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
+from importlib.metadata import PackageNotFoundError, version
+from typing import NoReturn
 
-from particlebot.protocol import DEFINITION_HASH
+from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
+from particlebot.protocol import DEFINITION_HASH, MessageType
+from particlebot.virtual import MAX_PARTICLES
 
 RADIO_HELP = (
     "radio URL: serial:///dev/ttyUSB0?baud=9600 (transparent XBee), xbee:///dev/ttyUSB0 "
@@ -16,6 +20,31 @@ RADIO_HELP = (
     "emulated://5?loss=0.2 (the real firmware image in simavr; needs `make firmware harness`); "
     "default $PARTICLEBOT_RADIO"
 )
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports a mistake in one line (what is wrong, where the help is) instead of
+    the usage block followed by the error."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
+def package_version() -> str:
+    try:
+        return version("particlebot")
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        return "unknown"
+
+
+def message_type(text: str) -> str:
+    """An argparse `type=`: a message type's name, any case (STATUS, status)."""
+    name = text.upper()
+    if name not in MessageType.__members__:
+        raise argparse.ArgumentTypeError(
+            f"no message type '{text}'; types: {', '.join(MessageType.__members__)}"
+        )
+    return name
 
 
 def _radio_options(parser: argparse.ArgumentParser) -> None:
@@ -31,10 +60,15 @@ def _log_options(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="particlebot",
         description="Base station for particle robots: console, logging, virtual swarm.",
         epilog=f"protocol definition hash {DEFINITION_HASH:08X}",
+    )
+    parser.add_argument(
+        "--version",
+        action="version",
+        version=f"particlebot {package_version()} (protocol definition {DEFINITION_HASH:08X})",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
@@ -44,29 +78,69 @@ def build_parser() -> argparse.ArgumentParser:
 
     log = commands.add_parser("log", help="record a radio to a log without the console")
     _radio_options(log)
-    log.add_argument("--duration", type=float, help="stop after this many seconds")
+    log.add_argument("--duration", type=float_arg(POSITIVE), help="stop after this many seconds")
 
     export = commands.add_parser("export", help="write a log's frames as CSV")
     export.add_argument("log", help="a .jsonl session log")
     export.add_argument("-o", "--output", help="CSV file (default: next to the log; - stdout)")
     export.add_argument(
-        "--type", action="append", help="only this message type (STATUS, ...); repeatable"
+        "--type",
+        action="append",
+        type=message_type,
+        help="only this message type (STATUS, ...); repeatable",
     )
+    export.add_argument("--notes", action="store_true", help="add the console's notes, a row each")
 
     plot = commands.add_parser("plot", help="draw a log as a PNG: radius, state, intensity")
     plot.add_argument("log", help="a .jsonl session log")
     plot.add_argument("-o", "--output", help="PNG file (default: next to the log)")
+    plot.add_argument(
+        "--run",
+        type=int_arg(Bounds(minimum=1, maximum=255)),
+        help="only this run: from its START to the next one",
+    )
+    plot.add_argument(
+        "--from",
+        dest="start",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="from S seconds after the session started (as on the time axis)",
+    )
+    plot.add_argument(
+        "--to",
+        dest="end",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="up to S seconds after the session started",
+    )
 
     replay = commands.add_parser("replay", help="feed a log back through the console")
     replay.add_argument("log", help="a .jsonl session log")
-    replay.add_argument("--speed", default="1", help="times real time, or max (default 1)")
+    replay.add_argument(
+        "--speed",
+        type=float_arg(SPEED),
+        help="times real time, or max (default 1 in the console, max with --no-ui)",
+    )
     replay.add_argument("--no-ui", action="store_true", help="print a summary instead")
 
     demo = commands.add_parser("demo", help="a virtual swarm at a lamp: START (method D), STOP")
-    demo.add_argument("--particles", type=int, default=10, help="how many (default 10)")
-    demo.add_argument("--speed", type=float, help="times real time (default 2 live, 20 headless)")
-    demo.add_argument("--run-s", type=float, default=12.0, help="simulated seconds of cycling")
-    demo.add_argument("--seed", type=int, default=1, help="random seed of the particles")
+    demo.add_argument(
+        "--particles",
+        type=int_arg(Bounds(minimum=1, maximum=MAX_PARTICLES)),
+        default=10,
+        help=f"how many, 1..{MAX_PARTICLES} (default 10)",
+    )
+    demo.add_argument(
+        "--speed",
+        type=float_arg(SPEED),
+        help="times real time, or max (default 2 live, 20 headless)",
+    )
+    demo.add_argument(
+        "--run-s", type=float_arg(POSITIVE), default=12.0, help="simulated seconds of cycling"
+    )
+    demo.add_argument(
+        "--seed", type=int_arg(NON_NEGATIVE), default=1, help="random seed of the particles"
+    )
     demo.add_argument("--no-ui", action="store_true", help="print a summary, no live console")
     demo.add_argument("--no-log", action="store_true", help="do not write a session log")
     _log_options(demo)

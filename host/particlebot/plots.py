@@ -14,15 +14,22 @@ from typing import Any
 # Figure/FigureCanvasAgg pair (not pyplot) keeps no global state between plots.
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
 from particlebot.protocol import Method, State
+from particlebot.resets import reset_cause, restarted
 
 Record = dict[str, Any]
 
 # Commands worth a marker: the ones that change what every particle does.
 MARKED_COMMANDS = ("START", "STOP")
+
+# A particle acts on STOP the moment it arrives; a STATUS after it in one of these states shows
+# the particle obeyed, so the plot draws it stopped from the STOP on, not from that STATUS.
+OBEYED_STOP_STATES = frozenset({State.STOPPING, State.IDLE, State.DONE})
+RESET_COLOUR = "#d62728"
 
 # The STATUS_PERIOD_MS default, used to hold a lone sample when a particle's own spacing is unknown.
 DEFAULT_STATUS_PERIOD_S = 2.0
@@ -64,6 +71,8 @@ class ParticleSeries:
     s_n: list[int] = field(default_factory=list)
     intensity: list[int] = field(default_factory=list)
     radius_um: list[int] = field(default_factory=list)
+    resets: list[ResetMark] = field(default_factory=list)
+    """Resets seen between two of its STATUS frames (at the later one's time)."""
 
     @property
     def radius_mm(self) -> list[float]:
@@ -83,6 +92,12 @@ class ParticleSeries:
         """The typical spacing of this particle's STATUS frames (their median gap)."""
         gaps = [b - a for a, b in zip(self.times, self.times[1:], strict=False) if b > a]
         return statistics.median(gaps) if gaps else DEFAULT_STATUS_PERIOD_S
+
+
+@dataclass(frozen=True)
+class ResetMark:
+    t: float
+    cause: str
 
 
 @dataclass(frozen=True)
@@ -120,6 +135,18 @@ class SessionSeries:
     radio: str = ""
     started: str = ""
     warnings: list[str] = field(default_factory=list)
+    start: float = 0.0
+    """The time axis shows start..end (seconds since the session started): the whole session,
+    or the run or window asked for."""
+    end: float | None = None
+
+    @property
+    def shown_end(self) -> float:
+        return self.duration if self.end is None else self.end
+
+    @property
+    def stop_times(self) -> list[float]:
+        return [c.t for c in self.commands if c.name == "STOP" and not c.failed]
 
     @property
     def status_frames(self) -> int:
@@ -190,8 +217,8 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
     """Per-particle STATUS series and the commands sent. Particles come ordered by their latest
     S_n (nearest the light first), those never estimated last, ties by id."""
     notes = list(warnings)
-    # The "end" record is stamped with the host's wall clock, which a sped-up virtual radio's
-    # clock outruns, so it is no guide to when the session's frames happened.
+    # Logs written before the end record took the session's clock stamped it with the host's wall
+    # clock, which a sped-up virtual radio's clock outruns: it is no guide to when frames came.
     timed = [(t, r) for r in records if r.get("kind") != "end" and (t := _time(r)) is not None]
     if not timed:
         raise PlotInputError("the log holds no timed records")
@@ -201,6 +228,7 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
     series: dict[int, ParticleSeries] = {}
     commands: list[CommandMark] = []
     malformed = 0
+    last_counters: dict[int, tuple[int, int]] = {}
     for t, record in sorted(timed, key=lambda item: item[0]):
         kind = record.get("kind")
         if kind == "frame" and record.get("type") == "STATUS":
@@ -224,6 +252,7 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
             particle.s_n.append(sample[1])
             particle.intensity.append(sample[2])
             particle.radius_um.append(sample[3])
+            _find_reset(particle, fields, t - t0, last_counters)
         elif kind == "tx" and record.get("type") in MARKED_COMMANDS:
             _add_command(commands, record, t - t0)
     if malformed:
@@ -242,6 +271,97 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
         started=str(session.get("started", "")),
         warnings=notes,
     )
+
+
+def _find_reset(
+    particle: ParticleSeries,
+    fields: Record,
+    t: float,
+    last_counters: dict[int, tuple[int, int]],
+) -> None:
+    """Adds a ResetMark when this STATUS shows a reset since the particle's previous one (logs
+    from before STATUS carried the counters have none to show)."""
+    try:
+        counters = (_int_field(fields, "resets"), _int_field(fields, "uptime_ms"))
+        cause = _int_field(fields, "last_reset_cause")
+    except (KeyError, TypeError):
+        return
+    previous = last_counters.get(particle.particle_id)
+    last_counters[particle.particle_id] = counters
+    if previous is not None and restarted(*previous, *counters):
+        particle.resets.append(ResetMark(t, reset_cause(cause)))
+
+
+def select(session: SessionSeries, start: float | None, end: float | None) -> SessionSeries:
+    """The part of a session between start and end (seconds since it started; None: its
+    beginning or end). Particles with no STATUS in it are left out."""
+    low = 0.0 if start is None else start
+    high = session.duration if end is None else end
+    if high <= low:
+        raise PlotInputError(f"the window {low:g}..{high:g} s is empty")
+    particles = []
+    for particle in session.particles:
+        keep = [i for i, t in enumerate(particle.times) if low <= t <= high]
+        if not keep:
+            continue
+        particles.append(
+            ParticleSeries(
+                particle.particle_id,
+                times=[particle.times[i] for i in keep],
+                states=[particle.states[i] for i in keep],
+                s_n=[particle.s_n[i] for i in keep],
+                intensity=[particle.intensity[i] for i in keep],
+                radius_um=[particle.radius_um[i] for i in keep],
+                resets=[r for r in particle.resets if low <= r.t <= high],
+            )
+        )
+    if not particles:
+        raise PlotInputError(
+            f"no STATUS frames between {low:g} and {high:g} s (the session lasts "
+            f"{session.duration:.1f} s)"
+        )
+    return SessionSeries(
+        particles=particles,
+        commands=[c for c in session.commands if low <= c.t <= high],
+        duration=session.duration,
+        radio=session.radio,
+        started=session.started,
+        warnings=session.warnings,
+        start=low,
+        end=high,
+    )
+
+
+def run_window(records: Sequence[Record], run_id: int) -> tuple[float, float | None]:
+    """Where run run_id lies, in seconds since the session started: from its first START to the
+    next START of another run (None: the end of the log). PlotInputError names the runs there are
+    when it has none."""
+    timed = sorted(
+        ((t, r) for r in records if r.get("kind") != "end" and (t := _time(r)) is not None),
+        key=lambda item: item[0],
+    )
+    if not timed:
+        raise PlotInputError("the log holds no timed records")
+    t0 = timed[0][0]
+    start: float | None = None
+    runs: list[int] = []
+    for t, record in timed:
+        if record.get("kind") != "tx" or record.get("type") != "START":
+            continue
+        fields = record.get("fields")
+        run = fields.get("run_id") if isinstance(fields, dict) else None
+        if not isinstance(run, int):
+            continue
+        if run not in runs:
+            runs.append(run)
+        if run == run_id and start is None:
+            start = t - t0
+        elif run != run_id and start is not None:
+            return start, t - t0
+    if start is None:
+        known = ", ".join(str(r) for r in runs) or "none"
+        raise PlotInputError(f"no START of run {run_id} in the log (runs started: {known})")
+    return start, None
 
 
 def _add_command(commands: list[CommandMark], record: Record, t: float) -> None:
@@ -266,21 +386,30 @@ def _add_command(commands: list[CommandMark], record: Record, t: float) -> None:
     commands.append(CommandMark(t, name, detail, failed=failed))
 
 
-def state_bands(particle: ParticleSeries, session_end: float) -> list[StateBand]:
+def state_bands(
+    particle: ParticleSeries, session_end: float, stops: Sequence[float] = ()
+) -> list[StateBand]:
     """The states as sampled: each STATUS holds until the next one, the last for one STATUS period
-    (not past the session's end), and a silence of more than GAP_PERIODS periods is left empty."""
+    (not past the session's end), and a silence of more than GAP_PERIODS periods is left empty.
+    A STOP sent (stops: its times) between two samples, the later of which shows the particle
+    obeyed it, ends the earlier state at the STOP: particles act on STOP when it arrives."""
     period = particle.sample_period()
     bands: list[StateBand] = []
+    begins = list(particle.times)
     for index, (t, state) in enumerate(zip(particle.times, particle.states, strict=True)):
+        begin = begins[index]
         if index + 1 < len(particle.times):
             following = particle.times[index + 1]
             held = following if following - t <= GAP_PERIODS * period else t + period
+            stop = next((s for s in stops if t < s < held), None)
+            if stop is not None and particle.states[index + 1] in OBEYED_STOP_STATES:
+                held = begins[index + 1] = stop
         else:
             held = max(t, min(t + period, session_end))
-        if bands and bands[-1].state == state and bands[-1].end == t:
+        if bands and bands[-1].state == state and bands[-1].end == begin:
             bands[-1] = StateBand(state, bands[-1].start, held)
         else:
-            bands.append(StateBand(state, t, held))
+            bands.append(StateBand(state, begin, held))
     return bands
 
 
@@ -327,8 +456,9 @@ def render(session: SessionSeries, title: str) -> Figure:
         fontsize=11,
     )
 
+    handles: dict[int, Any] = {}
     for colour, particle in zip(colours, session.particles, strict=True):
-        radius_ax.plot(
+        (handles[particle.particle_id],) = radius_ax.plot(
             particle.times,
             particle.radius_mm,
             marker="o",
@@ -348,8 +478,10 @@ def render(session: SessionSeries, title: str) -> Figure:
     radius_ax.set_ylabel("commanded radius (mm)")
     radius_ax.set_title("commanded radius per particle, from STATUS radius_um", fontsize=10)
     radius_ax.grid(True, alpha=0.3)
+    # Rows of the state panel follow the wave (S_n); the legend is where a person looks an id up.
     radius_ax.legend(
-        title="particle (by S_n)",
+        handles=[handles[key] for key in sorted(handles)],
+        title="particle",
         loc="upper left",
         bbox_to_anchor=(1.005, 1.0),
         fontsize=8,
@@ -357,8 +489,29 @@ def render(session: SessionSeries, title: str) -> Figure:
     )
 
     seen_states: set[int] = set()
+    any_reset = False
     for row, particle in enumerate(session.particles):
-        for band in state_bands(particle, session.duration):
+        for reset in particle.resets:
+            any_reset = True
+            state_ax.plot(
+                [reset.t],
+                [row],
+                marker="X",
+                markersize=11,
+                color=RESET_COLOUR,
+                markeredgecolor="white",
+                zorder=5,
+            )
+            state_ax.annotate(
+                f"reset ({reset.cause})",
+                (reset.t, row),
+                xytext=(7, -3),
+                textcoords="offset points",
+                fontsize=8,
+                color=RESET_COLOUR,
+                fontweight="bold",
+            )
+        for band in state_bands(particle, session.shown_end, session.stop_times):
             seen_states.add(band.state)
             state_ax.broken_barh(
                 [(band.start, band.end - band.start)],
@@ -370,11 +523,25 @@ def render(session: SessionSeries, title: str) -> Figure:
     state_ax.set_ylim(count - 0.5, -0.5)
     state_ax.set_title("state per particle (as reported in STATUS)", fontsize=10)
     state_ax.grid(True, axis="x", alpha=0.3)
+    state_handles: list[Any] = [
+        Patch(color=STATE_COLOURS.get(state, UNKNOWN_STATE_COLOUR), label=_state_name(state))
+        for state in sorted(seen_states)
+    ]
+    if any_reset:
+        state_handles.append(
+            Line2D(
+                [],
+                [],
+                marker="X",
+                color=RESET_COLOUR,
+                markeredgecolor="white",
+                linestyle="",
+                markersize=9,
+                label="reset",
+            )
+        )
     state_ax.legend(
-        handles=[
-            Patch(color=STATE_COLOURS.get(state, UNKNOWN_STATE_COLOUR), label=_state_name(state))
-            for state in sorted(seen_states)
-        ],
+        handles=state_handles,
         title="state",
         loc="upper left",
         bbox_to_anchor=(1.005, 1.0),
@@ -386,10 +553,10 @@ def render(session: SessionSeries, title: str) -> Figure:
     intensity_ax.set_title("light intensity per particle (mean of healthy sensors)", fontsize=10)
     intensity_ax.grid(True, alpha=0.3)
     intensity_ax.set_xlabel("time since the session started (s)")
-    intensity_ax.set_xlim(0.0, max(session.duration, 1.0))
+    span = max(session.shown_end - session.start, 1.0)
+    intensity_ax.set_xlim(session.start, session.start + span)
 
     label_at = blended_transform_factory(radius_ax.transData, radius_ax.transAxes)
-    span = max(session.duration, 1.0)
     previous_t: float | None = None
     height = 0.98
     for command in session.commands:
@@ -401,7 +568,7 @@ def render(session: SessionSeries, title: str) -> Figure:
         close = previous_t is not None and command.t - previous_t < 0.3 * span
         height = height - 0.08 if close and height > 0.6 else 0.98
         previous_t = command.t
-        right_side = command.t > 0.6 * span
+        right_side = command.t - session.start > 0.6 * span
         radius_ax.text(
             command.t,
             height,
@@ -417,11 +584,34 @@ def render(session: SessionSeries, title: str) -> Figure:
     return figure
 
 
-def plot_log(log: Path, output: Path) -> PlotResult:
-    """Reads log and writes its plot as a PNG to output (PlotInputError if it cannot)."""
+def plot_log(
+    log: Path,
+    output: Path,
+    *,
+    run: int | None = None,
+    start: float | None = None,
+    end: float | None = None,
+) -> PlotResult:
+    """Reads log and writes its plot as a PNG to output (PlotInputError if it cannot): the whole
+    session, one run (from its START to the next), or the window start..end (seconds since the
+    session started)."""
     loaded = read_records(log)
     session = extract(loaded.records, loaded.warnings)
-    title = f"particlebot session {log.name}: {len(session.particles)} particles"
+    what = ""
+    if run is not None:
+        run_start, run_end = run_window(loaded.records, run)
+        start = run_start if start is None else max(start, run_start)
+        end = run_end if end is None or run_end is None else min(end, run_end)
+        what = f", run {run}"
+    if start is not None or end is not None:
+        session = select(session, start, end)
+        what += f", {session.start:.1f}-{session.shown_end:.1f} s"
+    for particle in session.particles:
+        for reset in particle.resets:
+            session.warnings.append(
+                f"particle {particle.particle_id} reset at {reset.t:.1f} s ({reset.cause})"
+            )
+    title = f"particlebot session {log.name}{what}: {len(session.particles)} particles"
     if session.radio:
         title += f" on {session.radio}"
     if session.started:

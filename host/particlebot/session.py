@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
 from types import TracebackType
 from typing import Self
@@ -143,10 +143,6 @@ class Session:
         with self._listeners_lock:
             self._listeners.append(listener)
 
-    def remove_listener(self, listener: Listener) -> None:
-        with self._listeners_lock:
-            self._listeners.remove(listener)
-
     def now(self) -> float:
         return self.radio.now()
 
@@ -155,7 +151,8 @@ class Session:
     def send(self, message: Message) -> SentFrame:
         """Frames and broadcasts message from the base station; RadioError if the radio refuses.
 
-        The attempt is reported to listeners (and so logged) either way.
+        The attempt is reported to listeners (and so logged) either way, after the send lock is
+        released: a listener that sends, or waits for a thread that does, cannot deadlock.
         """
         with self._send_lock:
             seq = self._seq
@@ -165,14 +162,19 @@ class Session:
             try:
                 self.radio.send(raw)
             except RadioError as exc:
-                self._emit("on_sent", SentFrame(self.now(), frame, str(exc)))
-                raise
-            sent = SentFrame(self.now(), frame)
-        self._emit("on_sent", sent)
+                refused: RadioError | None = exc
+                sent = SentFrame(self.now(), frame, str(exc))
+            else:
+                refused = None
+                sent = SentFrame(self.now(), frame)
+        self._emit(lambda listener: listener.on_sent(sent))
+        if refused is not None:
+            raise refused
         return sent
 
     def note(self, text: str) -> None:
-        self._emit("on_note", Note(self.now(), text))
+        note = Note(self.now(), text)
+        self._emit(lambda listener: listener.on_note(note))
 
     # ---- receiving -------------------------------------------------------------------------
 
@@ -181,21 +183,24 @@ class Session:
             try:
                 packet = self.radio.receive(timeout=0.05)
             except RadioError as exc:
-                self.error = exc
-                self._emit("on_link", LinkEvent(LinkState.CLOSED, str(exc), self.now()))
+                self._fail(exc)
                 return
             except Exception as exc:  # reported, then the thread ends cleanly
                 _log.exception("radio receive failed")
-                self.error = RadioError(f"radio failed: {exc}")
-                self._emit("on_link", LinkEvent(LinkState.CLOSED, str(self.error), self.now()))
+                self._fail(RadioError(f"radio failed: {exc}"))
                 return
             if packet is None:
                 self._flush_stale(self.now())
                 continue
             self._handle(packet)
 
+    def _fail(self, error: RadioError) -> None:
+        self.error = error
+        event = LinkEvent(LinkState.CLOSED, str(error), self.now())
+        self._emit(lambda listener: listener.on_link(event))
+
     def _handle(self, packet: Packet) -> None:
-        self._emit("on_packet", packet)
+        self._emit(lambda listener: listener.on_packet(packet))
         with self._decode_lock:
             last = self._last_bytes.get(packet.source)
             frames: list[Frame] = []
@@ -214,8 +219,7 @@ class Session:
                 if everything or last is None or now - last > FRAME_TIMEOUT_S:
                     flushed.append((source, self.decoder.flush(source)))
             drops = self._take_drops()
-        for event in drops:
-            self._emit("on_dropped", Dropped(now, event))
+        self._deliver(now, None, drops, [])
         for source, frames in flushed:
             self._deliver(now, source, [], frames)
 
@@ -232,23 +236,31 @@ class Session:
         frames: list[Frame],
     ) -> None:
         for event in drops:
-            self._emit("on_dropped", Dropped(time, event))
+            self._emit_dropped(Dropped(time, event))
         for frame in frames:
-            self._emit("on_frame", ReceivedFrame(time, source, frame))
+            self._emit_frame(ReceivedFrame(time, source, frame))
+
+    def _emit_dropped(self, dropped: Dropped) -> None:
+        self._emit(lambda listener: listener.on_dropped(dropped))
+
+    def _emit_frame(self, received: ReceivedFrame) -> None:
+        self._emit(lambda listener: listener.on_frame(received))
 
     def _on_link(self, event: LinkEvent) -> None:
         if event.state is LinkState.LOST:
             # Whatever half-frame the port held is gone with it.
             self._flush_stale(event.time, everything=True)
-        self._emit("on_link", event)
+        self._emit(lambda listener: listener.on_link(event))
 
     def _snapshot(self) -> list[Listener]:
         with self._listeners_lock:
             return list(self._listeners)
 
-    def _emit(self, method: str, item: object) -> None:
+    def _emit(self, call: Callable[[Listener], None]) -> None:
+        """call(listener) for every listener, e.g. lambda listener: listener.on_frame(received);
+        the callbacks are named in the code, so a type checker and a rename see each one."""
         for listener in self._snapshot():
             try:
-                getattr(listener, method)(item)
+                call(listener)
             except Exception:  # a faulty listener must not stop reception
-                _log.exception("listener %r failed in %s", listener, method)
+                _log.exception("listener %r failed", listener)

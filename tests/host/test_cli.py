@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import csv
+from importlib.metadata import version
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from particlebot.cli import main
 from particlebot.commands._common import open_station
 from particlebot.commands.demo import DemoResult, DemoScript, Phase, unresolved_neighbours
 from particlebot.console.app import ConsoleApp
+from particlebot.protocol import DEFINITION_HASH
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
@@ -124,3 +126,12 @@ def test_a_mismatch_from_readings_within_the_counting_tolerance_is_explained() -
 def test_neighbours_whose_readings_differ_enough_are_not_blamed() -> None:
     results = [_result(1, 1, 1, 900), _result(2, 2, 2, 700), _result(3, 3, 3, 650)]
     assert unresolved_neighbours(results) == []
+
+
+def test_version_names_the_package_and_the_protocol(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as ended:
+        main(["--version"])
+    assert ended.value.code == 0
+    assert capsys.readouterr().out == (
+        f"particlebot {version('particlebot')} (protocol definition {DEFINITION_HASH:08X})\n"
+    )

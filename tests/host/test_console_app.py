@@ -6,39 +6,55 @@ import asyncio
 from collections.abc import Callable, Coroutine
 from typing import Any
 
+from textual.geometry import Region
 from textual.pilot import Pilot
-from textual.widgets import DataTable, Input, RichLog
+from textual.widget import Widget
+from textual.widgets import DataTable, Input, RichLog, Static
 
-from particlebot.console.app import ConsoleApp
+from particlebot.console.app import ConfirmScreen, ConsoleApp
 from particlebot.console.model import ConsoleModel
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
 from particlebot.session import Session
 from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
 
 
-def run_app(test: Callable[[Pilot[int], FakeRadio], Coroutine[Any, Any, None]]) -> None:
+def run_app(
+    test: Callable[[Pilot[int], FakeRadio], Coroutine[Any, Any, None]],
+    size: tuple[int, int] = (140, 40),
+    read_only: bool = False,
+) -> ConsoleApp:
     radio = FakeRadio()
     recorder = Recorder()
     session = Session(radio, [recorder])
     model = ConsoleModel(session, radio.now)
     session.add_listener(model)
     session.start()
-    app = ConsoleApp(model, radio_name="fake://", log_path="logs/test.jsonl", refresh_s=0.05)
+    app = ConsoleApp(
+        model,
+        radio_name="fake://",
+        log_path="logs/test.jsonl",
+        refresh_s=0.05,
+        read_only=read_only,
+    )
 
     async def body() -> None:
-        async with app.run_test(size=(140, 40)) as pilot:
+        async with app.run_test(size=size) as pilot:
             await test(pilot, radio)
 
     try:
         asyncio.run(body())
     finally:
         session.close()
+    return app
 
 
-def hear_particles(radio: FakeRadio, app: ConsoleApp, **fields: int) -> None:
-    for particle in (1, 2, 3):
-        radio.inject(status_frame(particle, state=int(State.CYCLING), s_n=particle, **fields))
-    assert wait_until(lambda: len(app.model.rows()) == 3)
+def hear_particles(
+    radio: FakeRadio, app: ConsoleApp, ids: range = range(1, 4), **fields: int
+) -> None:
+    values: dict[str, int] = {"state": int(State.CYCLING), **fields}
+    for particle in ids:
+        radio.inject(status_frame(particle, s_n=particle, **values))
+    assert wait_until(lambda: len(app.model.rows()) == len(ids))
 
 
 def console(pilot: Pilot[int]) -> ConsoleApp:
@@ -51,9 +67,31 @@ async def refreshed(pilot: Pilot[int]) -> None:
     await pilot.pause(0.12)
 
 
-def table_text(app: ConsoleApp) -> list[list[str]]:
+def table_text(app: ConsoleApp) -> list[dict[str, str]]:
+    """Each row's cells by column key (id, state, s_n, ...)."""
     table = app.query_one(DataTable)
-    return [[str(cell) for cell in table.get_row_at(i)] for i in range(table.row_count)]
+    keys = [str(column.key.value) for column in table.ordered_columns]
+    return [
+        dict(zip(keys, (str(cell) for cell in table.get_row_at(i)), strict=True))
+        for i in range(table.row_count)
+    ]
+
+
+def screen_lines(widget: Widget) -> list[str]:
+    """What a widget shows on screen, line by line."""
+    region = Region(0, 0, widget.size.width, widget.size.height)
+    return [strip.text for strip in widget.render_lines(region)]
+
+
+async def footer_text(pilot: Pilot[int]) -> str:
+    """The bottom line of the screen as drawn (the footer's keys are widgets of their own, laid
+    out once the app has settled its key bindings)."""
+    for _ in range(50):
+        text = pilot.app.screen._compositor.render_strips()[-1].text
+        if text.strip():
+            break
+        await pilot.pause(0.05)
+    return text
 
 
 def log_text(app: ConsoleApp) -> str:
@@ -66,10 +104,10 @@ def test_every_particle_heard_appears_in_the_table_with_its_s_n() -> None:
         hear_particles(radio, app)
         await refreshed(pilot)
         rows = table_text(app)
-        assert [row[0] for row in rows] == ["1", "2", "3"]
-        assert [row[3] for row in rows] == ["1", "2", "3"]
-        assert all(row[1] == "CYCLING" for row in rows)
-        assert all(row[6] == f"{DEFINITION_HASH:08X}" for row in rows)
+        assert [row["id"] for row in rows] == ["1", "2", "3"]
+        assert [row["s_n"] for row in rows] == ["1", "2", "3"]
+        assert [row["state"] for row in rows] == ["CYCLING"] * 3
+        assert [row["hash"] for row in rows] == [f"{DEFINITION_HASH:08X}"] * 3
 
     run_app(test)
 
@@ -81,7 +119,7 @@ def test_the_table_lists_particles_by_id_whatever_order_they_are_heard_in() -> N
             radio.inject(status_frame(particle, state=int(State.IDLE)))
             assert wait_until(lambda: particle in {row.id for row in app.model.rows()})  # noqa: B023
             await refreshed(pilot)  # each one is added to the table on its own
-        assert [row[0] for row in table_text(app)] == ["3", "7", "12"]
+        assert [row["id"] for row in table_text(app)] == ["3", "7", "12"]
 
     run_app(test)
 
@@ -91,7 +129,9 @@ def test_a_foreign_firmware_hash_is_flagged_in_the_table() -> None:
         app = console(pilot)
         hear_particles(radio, app, definition_hash=0x12345678)
         await refreshed(pilot)
-        assert all("HASH MISMATCH" in row[-1] for row in table_text(app))
+        rows = table_text(app)
+        assert len(rows) == 3  # all() of an empty table would pass
+        assert all("HASH MISMATCH" in row["flags"] for row in rows)
 
     run_app(test)
 
@@ -108,19 +148,46 @@ def test_the_x_key_broadcasts_stop_at_once() -> None:
     run_app(test)
 
 
-def test_the_s_key_offers_a_start_line_that_enter_sends() -> None:
+def test_the_s_key_then_enter_starts_without_touching_stored_settings() -> None:
     async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
         app = console(pilot)
-        hear_particles(radio, app)
+        hear_particles(radio, app, state=int(State.IDLE))
         await pilot.press("s")
         command = app.query_one(Input)
         assert command.has_focus
-        assert command.value.startswith("start D")
         await pilot.press("enter")
         assert wait_until(lambda: len(radio.sent) >= 1)
         message = radio.sent_frames()[0].message
         assert isinstance(message, Start)
-        assert (message.method, message.cycle_steps) == (Method.COUNTING, 150)
+        assert message.method == Method.COUNTING
+        # 0: each particle keeps the cycle and update interval stored with `set`.
+        assert (message.cycle_steps, message.update_interval_s, message.wave_size) == (0, 0, 0)
+        assert "stored setting" in log_text(app)
+
+    run_app(test)
+
+
+def test_what_is_typed_after_s_completes_the_start_line() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, state=int(State.IDLE))
+        await pilot.press("s", "A", "space", "c", "y", "c", "l", "e", "=", "3", "0", "0")
+        assert app.query_one(Input).value == "start A cycle=300"
+        await pilot.press("enter")
+        assert wait_until(lambda: len(radio.sent) >= 1)
+        message = radio.sent_frames()[0].message
+        assert isinstance(message, Start)
+        assert (message.method, message.cycle_steps) == (Method.DIRECT, 300)
+
+    run_app(test)
+
+
+def test_the_p_key_prefill_sets_nothing_by_itself() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.press("p", "enter")
+        assert "usage: set PARAM VALUE" in log_text(app)
+        assert radio.sent == []
 
     run_app(test)
 
@@ -153,3 +220,164 @@ def test_the_keys_are_explained_on_screen() -> None:
         assert "setid ID NEW_ID" in log_text(app)
 
     run_app(test)
+
+
+# ---- a small terminal ---------------------------------------------------------------------------
+
+
+def test_at_80_by_24_every_row_of_ten_the_counters_and_the_keys_show() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, ids=range(1, 11))
+        await refreshed(pilot)
+        table = app.query_one(DataTable)
+        assert table.row_count == 10
+        assert table.max_scroll_y == 0  # all ten rows fit, none hidden below
+        status = screen_lines(app.query_one("#status", Static))
+        assert "10 particles" in status[0]
+        assert "frames 10  bad 0" in status[1]
+        assert "q Quit" in await footer_text(pilot)
+        flags_header = table.ordered_columns[-1]
+        assert str(flags_header.label) == "FLAGS"
+        assert sum(c.get_render_width(table) for c in table.ordered_columns) <= 80
+
+    run_app(test, size=(80, 24))
+
+
+def test_at_80_by_24_a_bigger_swarm_scrolls_and_says_how_big_it_is() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, ids=range(1, 21))
+        await refreshed(pilot)
+        table = app.query_one(DataTable)
+        assert "20 particles" in screen_lines(app.query_one("#status", Static))[0]
+        assert table.max_scroll_y > 0
+        await pilot.press(*["down"] * 19)  # to the last particle
+        await pilot.pause()
+        assert table.cursor_row == 19
+        assert table.scroll_y == table.max_scroll_y  # the table scrolled to show it
+
+    run_app(test, size=(80, 24))
+
+
+def test_a_wide_terminal_shows_every_column() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await refreshed(pilot)
+        keys = [str(c.key.value) for c in app.query_one(DataTable).ordered_columns]
+        assert keys == [
+            "id", "state", "s_n", "light", "phase", "run", "hash", "bad", "resets", "heard",
+            "flags",
+        ]  # fmt: skip
+
+    run_app(test, size=(200, 50))
+
+
+# ---- resets --------------------------------------------------------------------------------------
+
+
+def test_a_particle_that_reset_during_the_run_is_flagged_in_the_table() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, run_id=2, uptime_ms=50_000)
+        radio.inject(status_frame(2, state=int(State.IDLE), resets=2, last_reset_cause=0x04))
+        assert wait_until(lambda: app.model.rows()[1].reset_in_run == 2)
+        await refreshed(pilot)
+        rows = table_text(app)
+        assert rows[1]["resets"] == "2 brown-out"
+        assert rows[1]["flags"] == "RESET in run 2"
+        assert [row["resets"] for row in (rows[0], rows[2])] == ["1 power-on"] * 2
+        assert "Particle 2 reset during run 2 (brown-out" in log_text(app)
+
+    run_app(test)
+
+
+# ---- quitting and restarting while particles move ------------------------------------------------
+
+
+def test_quitting_while_particles_move_asks_and_can_stop_them_first() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await pilot.press("q")
+        assert isinstance(app.screen, ConfirmScreen)
+        assert "Particles 1-3 are in a run" in app.screen.question
+        await pilot.press("y")
+        assert wait_until(lambda: len(radio.sent) >= 1)
+        assert radio.sent_frames()[0].message == Stop()
+        assert app.is_running  # until every particle confirms
+        radio.clock.advance(0.4)  # the whole burst is due
+        await refreshed(pilot)
+        hear_particles(radio, app, state=int(State.IDLE))
+        await refreshed(pilot)
+        assert not app.is_running
+
+    app = run_app(test)
+    assert app.return_value == 0
+
+
+def test_quitting_while_particles_move_can_leave_them_running_or_be_cancelled() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await pilot.press("q")
+        await pilot.press("escape")
+        assert not isinstance(app.screen, ConfirmScreen) and app.is_running
+        await pilot.press("q", "n")
+        await pilot.pause()
+        assert not app.is_running
+        assert radio.sent == []
+
+    run_app(test)
+
+
+def test_quitting_idle_particles_asks_nothing() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, state=int(State.IDLE))
+        await pilot.press("q")
+        await pilot.pause()
+        assert not app.is_running
+
+    run_app(test)
+
+
+def test_start_during_a_run_asks_before_restarting_it() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await pilot.press("s", "enter")
+        assert isinstance(app.screen, ConfirmScreen)
+        await pilot.press("n")
+        assert "START not sent" in log_text(app)
+        assert radio.sent == []
+        await pilot.press("s", "enter", "y")
+        assert wait_until(lambda: len(radio.sent) >= 1)
+        assert isinstance(radio.sent_frames()[0].message, Start)
+
+    run_app(test)
+
+
+# ---- a replay ------------------------------------------------------------------------------------
+
+
+def test_a_replay_offers_no_command_that_sends() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await pilot.press("s", "x")
+        assert not app.query_one(Input).has_focus  # the keys that send do nothing
+        footer = await footer_text(pilot)
+        assert "Start" not in footer and "STOP" not in footer and "Quit" in footer
+        await pilot.press("colon")
+        app.query_one(Input).value = "stop"
+        await pilot.press("enter")
+        await refreshed(pilot)
+        assert log_text(app).count("nothing can be sent") == 2  # the welcome, then once
+        assert radio.sent == []
+        await pilot.press("q")  # nothing moves in a replay: no question
+        await pilot.pause()
+        assert not app.is_running
+
+    run_app(test, read_only=True)

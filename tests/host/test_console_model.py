@@ -24,6 +24,7 @@ from particlebot.protocol import (
     decode_frame,
     encode_frame,
 )
+from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
 from tests.host.fakes import ManualClock, status_frame
 
@@ -77,7 +78,9 @@ def model(sink: Sink, clock: ManualClock) -> ConsoleModel:
 
 
 def hear(model: ConsoleModel, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
+    """The frame arrives; then the console's next poll (at the same moment) looks at it."""
     model.on_frame(ReceivedFrame(clock(), source, decode_frame(raw)))
+    model.poll()
 
 
 def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualClock) -> None:
@@ -425,3 +428,167 @@ def test_help_lists_every_command() -> None:
     text = help_text()
     for command in ("start", "stop", "set", "get", "identify", "setid", "ping", "quit"):
         assert f"\n{command}" in f"\n{text}"
+
+
+# ---- answers to SET_PARAM and GET_PARAM --------------------------------------------------------
+
+
+def answer(
+    model: ConsoleModel, clock: ManualClock, particle: int, result: ParamResult, value: int
+) -> None:
+    reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(result), value=value)
+    hear(model, clock, encode_frame(reply, particle, 0))
+
+
+def test_answers_to_a_broadcast_set_are_summarised_in_one_line(
+    model: ConsoleModel, clock: ManualClock, sink: Sink
+) -> None:
+    hear_all(model, clock, range(1, 11), State.IDLE)
+    notes_before = len(model.notes)
+    model.set_param(Param.CYCLE_STEPS, 300)
+    for particle in range(1, 11):
+        clock.advance(0.06)
+        answer(model, clock, particle, ParamResult.OK, 300)
+    (summary,) = [note.text for note in list(model.notes)[notes_before:]]
+    assert summary == "SET CYCLE_STEPS = 300: 10/10 OK"
+    assert sink.notes[-1] == summary  # and it goes into the log
+
+
+def test_refusals_and_silence_are_named_in_the_summary(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear_all(model, clock, range(1, 11), State.IDLE)
+    notes_before = len(model.notes)
+    model.set_param(Param.CYCLE_STEPS, 300)
+    for particle in (1, 2, 4, 5, 6, 8, 10):
+        answer(model, clock, particle, ParamResult.OK, 300)
+    for particle in (3, 7):
+        answer(model, clock, particle, ParamResult.BUSY, 150)
+    run(model, clock, model.param_timeout)
+    (summary,) = [note for note in list(model.notes)[notes_before:]]
+    assert summary.text == (
+        "SET CYCLE_STEPS = 300: 7/10 OK; BUSY: 3, 7 (STOP them first); no answer from 9"
+    )
+    assert summary.level == "warning"
+
+
+def test_a_broadcast_get_groups_the_particles_by_value(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear_all(model, clock, range(1, 11), State.IDLE)
+    model.get_param(Param.CYCLE_STEPS)
+    for particle in range(1, 11):
+        answer(model, clock, particle, ParamResult.OK, 300 if particle in (4, 9) else 150)
+    assert model.notes[-1].text == "GET CYCLE_STEPS: 150 on 1-3, 5-8, 10; 300 on 4, 9"
+
+
+def test_a_get_nobody_answers_says_so_after_its_timeout(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear_all(model, clock, range(1, 3), State.IDLE)
+    model.get_param(Param.CYCLE_STEPS)
+    run(model, clock, model.param_timeout - 0.1)
+    assert not model.notes
+    run(model, clock, 0.1)
+    assert model.notes[-1].text == "GET CYCLE_STEPS: no particle answered within 2 s"
+    model.get_param(Param.CYCLE_STEPS, 7)
+    run(model, clock, model.param_timeout)
+    assert model.notes[-1].text == "GET CYCLE_STEPS to particle 7: no answer within 2 s"
+
+
+def test_the_answer_of_one_particle_asked_by_id_is_one_line(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    model.get_param(Param.CYCLE_STEPS, 3)
+    answer(model, clock, 3, ParamResult.OK, 150)
+    assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (OK)"
+
+
+# ---- resets ------------------------------------------------------------------------------------
+
+
+def test_a_particle_that_resets_during_a_run_is_flagged_with_the_cause(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(4, state=int(State.CYCLING), run_id=3, uptime_ms=60_000))
+    clock.advance(2.0)
+    # A brown-out under servo load: back as IDLE, one more reset counted, uptime from zero.
+    hear(model, clock, status_frame(4, state=int(State.IDLE), resets=2, last_reset_cause=0x04))
+    (row,) = model.rows()
+    assert row.reset_in_run == 3
+    assert model.notes[-1].level == "error"
+    assert "Particle 4 reset during run 3 (brown-out" in model.notes[-1].text
+    model.start(Method.COUNTING)
+    assert row.reset_in_run is None  # a new run starts with a clean slate
+
+
+def test_a_reset_outside_a_run_is_noted_but_not_flagged(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(4, uptime_ms=60_000))
+    hear(model, clock, status_frame(4, resets=2, last_reset_cause=0x01))
+    assert model.rows()[0].reset_in_run is None
+    assert model.notes[-1].text == (
+        "Particle 4 reset (power-on: it was switched off and on, or lost power)"
+    )
+
+
+def test_a_reset_with_a_saturated_counter_is_still_seen_by_the_uptime(
+    model: ConsoleModel, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(4, state=int(State.PAUSED), resets=255, uptime_ms=9_000))
+    hear(model, clock, status_frame(4, resets=255, uptime_ms=400, last_reset_cause=0x08))
+    assert model.rows()[0].reset_in_run == 0
+    assert "watchdog" in model.notes[-1].text
+
+
+# ---- a radio that hears nothing, one that cannot send --------------------------------------------
+
+
+def test_a_radio_that_hears_nothing_gets_a_hint_once(sink: Sink, clock: ManualClock) -> None:
+    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    run(model, clock, 4.9)
+    assert not model.notes
+    run(model, clock, 10.0)
+    assert [note.text for note in model.notes] == [
+        "Nothing heard for 5 s. Check the baud, PAN ID and channel."
+    ]
+
+
+def test_a_radio_that_hears_something_gets_no_hint(sink: Sink, clock: ManualClock) -> None:
+    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    model.on_packet(Packet(b"\x00", None, clock()))
+    run(model, clock, 10.0)
+    assert not model.notes
+
+
+class ReadOnlySink(Sink):
+    def send(self, message: Message) -> None:
+        raise ReadOnlyRadioError("This is a replay")
+
+
+class LostPortSink(Sink):
+    def send(self, message: Message) -> None:
+        raise PortLostError("port gone")
+
+
+def test_a_radio_that_can_never_send_ends_a_campaign_with_one_message(clock: ManualClock) -> None:
+    model = ConsoleModel(ReadOnlySink(clock), clock)
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    campaign = model.stop()
+    run(model, clock, 3.0)
+    assert campaign.done and not campaign.success
+    assert [note.text for note in model.notes if "send" in note.text] == [
+        "Could not send STOP: This is a replay"
+    ]
+
+
+def test_a_lost_port_is_reported_once_per_campaign_not_once_per_resend(
+    clock: ManualClock,
+) -> None:
+    model = ConsoleModel(LostPortSink(clock), clock)
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    campaign = model.stop()
+    run(model, clock, 3.0)
+    assert not campaign.done  # the port may come back: it keeps trying
+    assert len([note for note in model.notes if "Could not send" in note.text]) == 1

@@ -9,18 +9,30 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
+from particlebot.cli import main
 from particlebot.logs.export import export_csv
 from particlebot.logs.jsonl import JsonlWriter, LogFormatError, default_log_path, read_log
 from particlebot.logs.replay import ReplayRadio
-from particlebot.protocol import DropReason, Stop
-from particlebot.radio import ReadOnlyRadioError
+from particlebot.protocol import (
+    DropReason,
+    Method,
+    Param,
+    ParamResult,
+    ParamValue,
+    State,
+    Stop,
+    decode_frame,
+    encode_frame,
+)
+from particlebot.radio import Packet, ReadOnlyRadioError
 from particlebot.radio.serial import SerialRadio
-from particlebot.session import Session
-from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
+from particlebot.session import Note, ReceivedFrame, Session
+from tests.host.fakes import FakeRadio, ManualClock, Recorder, status_frame, wait_until
 from tests.host.ptys import VanishingPty
 
 
@@ -201,3 +213,87 @@ def test_an_unplugged_port_is_logged_and_logging_goes_on_when_it_returns(tmp_pat
         ("frame", 2),
         ("link", "closed"),
     ]
+
+
+def test_the_end_of_a_log_is_never_stamped_before_what_it_ends(tmp_path: Path) -> None:
+    # A sped-up virtual radio's clock runs ahead of the wall clock, and so do its frames' times.
+    clock = ManualClock(start=time.time() + 3600.0)
+    path = tmp_path / "fast.jsonl"
+    writer = JsonlWriter(path, radio="virtual://1?speed=max", clock=clock)
+    clock.advance(5.0)
+    writer.on_frame(ReceivedFrame(clock() + 0.01, "virtual-01", decode_frame(status_frame(1))))
+    writer.on_close()
+    times = [record["t"] for record in read_log(path)]
+    assert times == sorted(times)
+    assert list(read_log(path))[-1]["kind"] == "end"
+
+
+def test_csv_shows_state_method_param_and_result_by_name(tmp_path: Path) -> None:
+    path = tmp_path / "names.jsonl"
+    writer = JsonlWriter(path)
+    status = status_frame(3, state=int(State.CYCLING), method=int(Method.NONLINEAR))
+    writer.on_frame(ReceivedFrame(1.0, None, decode_frame(status)))
+    reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(ParamResult.BUSY), value=150)
+    writer.on_frame(ReceivedFrame(2.0, None, decode_frame(encode_frame(reply, 3, 1))))
+    writer.on_note(Note(3.0, "STOP confirmed"))
+    writer.on_close()
+    out = io.StringIO()
+    assert export_csv(path, out) == 2
+    status_row, reply_row = csv.DictReader(io.StringIO(out.getvalue()))
+    assert (status_row["state"], status_row["method"]) == ("CYCLING", "NONLINEAR")
+    assert (reply_row["param"], reply_row["result"]) == ("CYCLE_STEPS", "BUSY")
+    assert "note" not in status_row
+    with_notes = io.StringIO()
+    assert export_csv(path, with_notes, notes=True) == 3
+    note = list(csv.DictReader(io.StringIO(with_notes.getvalue())))[-1]
+    assert (note["direction"], note["note"]) == ("note", "STOP confirmed")
+
+
+def test_csv_to_a_reader_that_stops_early_ends_quietly(tmp_path: Path) -> None:
+    path = tmp_path / "long.jsonl"
+    writer = JsonlWriter(path)
+    frame = decode_frame(status_frame(3))
+    for k in range(3000):  # some 500 KB of CSV: far more than a pipe holds
+        writer.on_frame(ReceivedFrame(float(k), None, frame))
+    writer.on_close()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "particlebot.cli", "export", str(path), "-o", "-"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert process.stdout is not None and process.stderr is not None
+    assert process.stdout.readline().startswith(b"t,direction")  # what `| head -1` does
+    process.stdout.close()
+    error = process.stderr.read()
+    assert process.wait(timeout=60) == 0
+    assert error == b""
+
+
+def write_timed_log(path: Path, span_s: float, packets: int = 20) -> Path:
+    writer = JsonlWriter(path)
+    for k in range(packets):
+        at = 1000.0 + span_s * k / (packets - 1)
+        writer.on_packet(Packet(status_frame(1 + k % 3, seq=k), None, at))
+    writer.on_close()
+    return path
+
+
+def test_replay_without_the_console_goes_as_fast_as_possible(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Ten minutes of log: at the old default, real time, this would outlast the test's timeout.
+    log = write_timed_log(tmp_path / "long.jsonl", span_s=600.0)
+    assert main(["replay", str(log), "--no-ui"]) == 0
+    out = capsys.readouterr().out
+    assert "Replaying 20 packets (600.0 s of log)" in out and "as fast as possible" in out
+    assert "Replayed 20 packets" in out
+
+
+def test_replay_without_the_console_shows_its_progress(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("particlebot.commands.replay.PROGRESS_EVERY_S", 0.1)
+    log = write_timed_log(tmp_path / "short.jsonl", span_s=4.0)
+    assert main(["replay", str(log), "--no-ui", "--speed", "8"]) == 0  # half a second
+    progress = [line for line in capsys.readouterr().out.splitlines() if " of 4.0 s" in line]
+    assert progress and progress[0].strip().endswith("of 4.0 s")

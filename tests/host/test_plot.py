@@ -17,6 +17,7 @@ from particlebot.plots import (
     StateBand,
     extract,
     read_records,
+    render,
     state_bands,
 )
 from particlebot.protocol import Method, Start, State, Stop, decode_frame, encode_frame
@@ -259,3 +260,100 @@ def test_the_headless_demo_writes_its_plot_next_to_its_log(
     png = log.with_suffix(".png")
     assert f"Plot: {png} (3 particles," in out
     assert png.read_bytes().startswith(PNG_MAGIC)
+
+
+def test_particles_that_obeyed_a_stop_are_drawn_stopped_from_the_stop_on(
+    session_log: Written,
+) -> None:
+    loaded = read_records(session_log.path)
+    session = extract(loaded.records)
+    bands = state_bands(session.particle(2), session.duration, session.stop_times)
+    # Particle 2 reported CYCLING at 8.5 s and IDLE at 10.5 s; STOP went out at 9.0 s.
+    assert [band.state for band in bands[-2:]] == [State.CYCLING, State.IDLE]
+    edges = [edge for band in bands[-2:] for edge in (band.start, band.end)]
+    assert edges == pytest.approx([6.5, STOP_AT, STOP_AT, NOTE_AT], abs=1e-5)
+
+
+def test_a_stop_the_next_status_does_not_show_obeyed_leaves_the_band_alone() -> None:
+    particle = ParticleSeries(
+        5,
+        times=[1.0, 3.0, 5.0],
+        states=[int(State.CYCLING), int(State.CYCLING), int(State.PAUSED)],
+        s_n=[1] * 3,
+        intensity=[600] * 3,
+        radius_um=[77500] * 3,
+    )
+    # A STOP it missed: its next STATUS still shows it running.
+    assert state_bands(particle, session_end=10.0, stops=[4.0]) == [
+        StateBand(State.CYCLING, 1.0, 5.0),
+        StateBand(State.PAUSED, 5.0, 7.0),
+    ]
+
+
+def test_the_radius_legend_lists_particles_by_id(session_log: Written) -> None:
+    loaded = read_records(session_log.path)
+    session = extract(loaded.records)
+    assert [p.particle_id for p in session.particles] == [2, 1, 0]  # rows follow the wave
+    figure = render(session, "title")
+    legend = figure.axes[0].get_legend()
+    assert legend is not None
+    assert [text.get_text() for text in legend.get_texts()] == [
+        "id 0",
+        "id 1  S_n 2",
+        "id 2  S_n 1",
+    ]
+
+
+def write_two_runs(path: Path) -> Path:
+    """Particle 1 in run 1 (START at 1 s), then run 2 (START at 10 s), STATUS every 2 s; at
+    14.5 s it reports having reset (a brown-out)."""
+    writer = JsonlWriter(path, radio="virtual://1")
+    t0 = json.loads(path.read_text().splitlines()[0])["t"]
+    for run_id, at in ((1, 1.0), (2, 10.0)):
+        start = Start(
+            run_id=run_id,
+            method=int(Method.COUNTING),
+            cycle_steps=100,
+            wave_size=0,
+            update_interval_s=0,
+            phototaxis=0,
+        )
+        writer.on_sent(SentFrame(t0 + at, decode_frame(encode_frame(start, 0, run_id))))
+    for seq, at in enumerate([0.5 + 2 * k for k in range(9)]):
+        reset = at > 14.0
+        message = status_message(
+            state=int(State.IDLE if reset else State.CYCLING),
+            run_id=1 if at < 10 else 2,
+            uptime_ms=200 if reset else int(at * 1000) + 5000,
+            resets=2 if reset else 1,
+            last_reset_cause=0x04 if reset else 0x01,
+        )
+        frame = decode_frame(encode_frame(message, 1, seq))
+        writer.on_frame(ReceivedFrame(t0 + at, "virtual-01", frame))
+    writer.on_close()
+    return path
+
+
+def test_one_run_or_a_time_window_can_be_plotted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = write_two_runs(tmp_path / "runs.jsonl")
+    assert main(["plot", str(log), "--run", "2", "-o", str(tmp_path / "run2.png")]) == 0
+    assert "(1 particles, 4 STATUS frames)" in capsys.readouterr().out  # 10.5 .. 16.5 s
+    assert main(["plot", str(log), "--from", "2", "--to", "7", "-o", str(tmp_path / "w.png")]) == 0
+    assert "(1 particles, 3 STATUS frames)" in capsys.readouterr().out  # 2.5, 4.5, 6.5 s
+    assert main(["plot", str(log), "--run", "1"]) == 0
+    assert "(1 particles, 4 STATUS frames)" in capsys.readouterr().out  # 2.5 .. 8.5 s
+    assert main(["plot", str(log), "--run", "3"]) == 2
+    assert "no START of run 3 in the log (runs started: 1, 2)" in capsys.readouterr().err
+
+
+def test_resets_are_found_in_the_log_and_reported(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = write_two_runs(tmp_path / "runs.jsonl")
+    loaded = read_records(log)
+    (particle,) = extract(loaded.records).particles
+    assert [(round(r.t, 3), r.cause) for r in particle.resets] == [(14.5, "brown-out")]
+    assert main(["plot", str(log)]) == 0
+    assert "particle 1 reset at 14.5 s (brown-out)" in capsys.readouterr().err

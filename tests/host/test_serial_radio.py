@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from particlebot.cli import main
+from particlebot.commands._common import open_station
 from particlebot.radio import (
     LinkEvent,
     LinkState,
@@ -114,3 +116,22 @@ def test_closing_while_lost_does_not_hang(pty: VanishingPty) -> None:
     radio.close()
     assert radio.receive(timeout=0.2) is None
     assert not os.path.exists(pty.path)
+
+
+def test_a_console_on_a_silent_port_is_told_what_to_check(pty: VanishingPty) -> None:
+    base = open_station(f"serial://{pty.path}?baud=19200", None)
+    try:
+        hint = base.model.quiet_hint or ""
+        assert "19200 baud" in hint and "PAN ID" in hint and "channel" in hint
+    finally:
+        base.session.close()
+
+
+def test_a_recording_on_a_silent_port_prints_the_hint(
+    pty: VanishingPty, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("particlebot.console.model.QUIET_HINT_S", 0.2)
+    log_dir = pty.path.parent / "logs"
+    argv = ["log", "--radio", f"serial://{pty.path}", "--log-dir", str(log_dir), "--duration", "1"]
+    assert main(argv) == 0
+    assert "warning: Nothing heard for 0.2 s. Check that the base XBee" in capsys.readouterr().out

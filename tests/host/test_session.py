@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
-from particlebot.protocol import DropReason, Ping, Stop, encode_frame
-from particlebot.radio import LinkState
-from particlebot.session import Listener, ReceivedFrame, Session
+import contextlib
+import threading
+
+from particlebot.console.model import ConsoleModel
+from particlebot.protocol import DropReason, Ping, State, Stop, encode_frame
+from particlebot.radio import LinkState, RadioError
+from particlebot.session import Listener, ReceivedFrame, SentFrame, Session
 from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
 
 
@@ -108,3 +112,56 @@ def test_a_lost_port_drops_half_frames_and_is_passed_on(fake_radio: FakeRadio) -
         fake_radio.lose("unplugged")
         assert recorder.wait(lambda: any(e.state is LinkState.LOST for e in recorder.links))
     assert any(d.event.reason is DropReason.TRUNCATED for d in recorder.dropped)
+
+
+def test_a_listener_told_of_a_refused_send_does_not_hold_up_other_senders(
+    fake_radio: FakeRadio,
+) -> None:
+    """on_sent runs after the send lock is released: a listener that waits for another thread's
+    send (here, one that resends) must not deadlock the session."""
+    other_done: list[bool] = []
+
+    class Resender(Listener):
+        def __init__(self, session: Session) -> None:
+            self.session = session
+
+        def on_sent(self, sent: SentFrame) -> None:
+            if other_done or threading.current_thread() is not threading.main_thread():
+                return
+
+            def resend() -> None:
+                with contextlib.suppress(RadioError):
+                    self.session.send(Ping(target=255))
+
+            other = threading.Thread(target=resend)
+            other.start()
+            other.join(timeout=2.0)
+            other_done.append(not other.is_alive())
+
+    fake_radio.fail_sends = True
+    with Session(fake_radio) as session:
+        session.add_listener(Resender(session))
+        with contextlib.suppress(RadioError):
+            session.send(Stop())
+    assert other_done == [True]
+
+
+def test_commands_never_go_out_from_the_receive_thread(fake_radio: FakeRadio) -> None:
+    senders: list[str] = []
+
+    class SendingThreads(Listener):
+        def on_sent(self, sent: SentFrame) -> None:
+            senders.append(threading.current_thread().name)
+
+    session = Session(fake_radio, [SendingThreads()])
+    model = ConsoleModel(session, fake_radio.now)
+    session.add_listener(model)
+    with session:
+        fake_radio.inject(status_frame(1, state=int(State.CYCLING)))
+        assert wait_until(lambda: len(model.rows()) == 1)
+        model.stop()  # the first copy of the burst, from this thread
+        fake_radio.clock.advance(0.15)  # the second copy is due...
+        fake_radio.inject(status_frame(1, state=int(State.CYCLING)))  # ...when a frame comes
+        assert wait_until(lambda: model.rows()[0].frames == 2)
+    # The session is closed, so the receive thread has finished whatever the frame set off.
+    assert senders and set(senders) == {threading.current_thread().name}

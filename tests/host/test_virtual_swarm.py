@@ -8,10 +8,10 @@ import pytest
 
 from particlebot.console.model import ConsoleModel
 from particlebot.protocol import Method, Start, State, encode_frame
-from particlebot.radio import InvalidRadioUrlError, open_radio
+from particlebot.radio import InvalidRadioUrlError, LinkState, open_radio
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.session import Session
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+from particlebot.virtual.swarm import FirmwareParticle, SwarmConfig, VirtualSwarm, native_factory
 from tests.host.fakes import wait_until
 
 
@@ -82,6 +82,50 @@ def test_the_swarm_clock_can_run_faster_than_real_time() -> None:
     assert swarm.achieved_speed > 1.0
 
 
+class FailingParticle:
+    """A particle whose logic raises once simulated time passes fail_at_ms."""
+
+    def __init__(self, inner: FirmwareParticle, fail_at_ms: int) -> None:
+        self.inner = inner
+        self.fail_at_ms = fail_at_ms
+
+    def set_adc(self, values: list[int]) -> None:
+        self.inner.set_adc(values)
+
+    def receive(self, data: bytes) -> None:
+        self.inner.receive(data)
+
+    def tick(self, now_ms: int) -> None:
+        if now_ms >= self.fail_at_ms:
+            raise RuntimeError("particle logic crashed")
+        self.inner.tick(now_ms)
+
+    def transmit(self) -> bytes:
+        return self.inner.transmit()
+
+    @property
+    def id(self) -> int:
+        return self.inner.id
+
+    @property
+    def radius_um(self) -> int:
+        return self.inner.radius_um
+
+
+def test_a_crashed_swarm_says_so_instead_of_looking_alive() -> None:
+    swarm = VirtualSwarm(
+        SwarmConfig(count=2), factory=lambda seed: FailingParticle(native_factory(seed), 3000)
+    )
+    radio = VirtualRadio(swarm, url="virtual://2", speed=math.inf)
+    session = Session(radio)
+    links: list[LinkState] = []
+    radio.add_link_listener(lambda event: links.append(event.state))
+    with session:
+        assert wait_until(lambda: session.error is not None, timeout=20)
+    assert "particle logic crashed" in str(session.error)
+    assert LinkState.LOST in links
+
+
 def test_url_options_place_the_lamp_and_the_line() -> None:
     radio = open_radio("virtual://3?lamp=1,2,0.35&start=0.5&spacing=0.2&kinematics=0&speed=1")
     assert isinstance(radio, VirtualRadio)
@@ -100,7 +144,7 @@ def test_url_options_place_the_lamp_and_the_line() -> None:
         ("virtual://ten", "number of particles"),
         ("virtual://0", "1..200"),
         ("virtual://3?lamp=1,2", "lamp=X,Y,H"),
-        ("virtual://3?speed=-1", "positive"),
+        ("virtual://3?speed=-1", "speed must be a number > 0 or max"),
         ("virtual://3?colour=red", "unknown option"),
     ],
 )

@@ -31,6 +31,11 @@ class Station:
         return None if self.log is None else self.log.path
 
 
+def has_terminal() -> bool:
+    """Whether a person sits at this process: keys can come in and a screen can be drawn."""
+    return sys.stdin.isatty() and sys.stdout.isatty()
+
+
 def fail(message: str) -> int:
     print(f"particlebot: {message}", file=sys.stderr)
     return 2
@@ -44,9 +49,11 @@ def open_station(radio: Radio | str, log_dir: Path | None, *, fsync: bool = Fals
         session = Session(radio)
         log = None
         if log_dir is not None:
-            log = JsonlWriter(default_log_path(log_dir), radio=radio.url, fsync=fsync)
+            log = JsonlWriter(
+                default_log_path(log_dir), radio=radio.url, fsync=fsync, clock=radio.now
+            )
             session.add_listener(log)
-        model = ConsoleModel(session, radio.now)
+        model = ConsoleModel(session, radio.now, quiet_hint=radio.quiet_hint)
         session.add_listener(model)
     except BaseException:
         radio.close()

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from particlebot.commands._common import fail, station
+from particlebot.commands._common import fail, has_terminal, station
 from particlebot.console.app import ConsoleApp
-from particlebot.radio import RadioError
+from particlebot.logs.jsonl import LogError
+from particlebot.radio import RadioError, parse_radio_url
 
 
 def run(args: argparse.Namespace) -> int:
@@ -15,6 +16,15 @@ def run(args: argparse.Namespace) -> int:
         return fail(
             "say which radio: --radio serial:///dev/ttyUSB0 (transparent XBee), "
             "--radio xbee:///dev/ttyUSB0 (API mode) or --radio virtual://10"
+        )
+    try:
+        parse_radio_url(args.radio)  # a mistyped URL is worth hearing about first
+    except RadioError as exc:
+        return fail(str(exc))
+    if not has_terminal():
+        # Textual would wait forever for keys that cannot come.
+        return fail(
+            "the console needs a terminal; to record without one: particlebot log --radio URL"
         )
     try:
         with station(args.radio, _log_dir(args), fsync=args.fsync) as base:
@@ -28,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
             except KeyboardInterrupt:
                 code = 0
             return code or 0
-    except RadioError as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))
 
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 import enum
 import itertools
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from particlebot.commands._common import fail, run_headless, station
+from particlebot.commands._common import fail, has_terminal, run_headless, station
 from particlebot.commands.plot import write_plot
 from particlebot.console.app import ConsoleApp
 from particlebot.console.model import Campaign, ConsoleModel, state_name
+from particlebot.logs.jsonl import LogError
 from particlebot.protocol import PARAM_SPECS, Method, Param, State
 from particlebot.radio import RadioError
 from particlebot.radio.virtual import VirtualRadio
@@ -188,7 +188,7 @@ def unresolved_neighbours(results: list[DemoResult]) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    ui = not args.no_ui and sys.stdout.isatty()
+    ui = not args.no_ui and has_terminal()
     speed = args.speed if args.speed is not None else (2.0 if ui else 20.0)
     config = SwarmConfig(count=args.particles, seed=args.seed)
     try:
@@ -228,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
                     return 130
             print(summary(script))
             print(f"simulated {swarm.t:.1f} s at {swarm.achieved_speed:.1f}x real time")
-    except RadioError as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))
     # Drawn once the log is closed, so it holds the whole session; a failed plot is reported but
     # does not turn a good demo into a failed one.

@@ -3,26 +3,37 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from particlebot.commands._common import fail
 from particlebot.logs.export import export_csv, export_csv_file
-from particlebot.logs.jsonl import LogFormatError
+from particlebot.logs.jsonl import LogError
 
 
 def run(args: argparse.Namespace) -> int:
     log = Path(args.log)
-    if not log.exists():
-        return fail(f"no log file {log}")
     types = args.type or None
     try:
         if args.output == "-":
-            export_csv(log, sys.stdout, types)
-            return 0
+            return _to_stdout(log, types, args.notes)
         output = Path(args.output) if args.output else log.with_suffix(".csv")
-        rows = export_csv_file(log, output, types)
-    except LogFormatError as exc:
+        rows = export_csv_file(log, output, types, notes=args.notes)
+    except LogError as exc:
         return fail(str(exc))
+    except OSError as exc:
+        return fail(f"cannot write {output}: {exc.strerror or exc}")
     print(f"Wrote {rows} rows to {output}")
+    return 0
+
+
+def _to_stdout(log: Path, types: list[str] | None, notes: bool) -> int:
+    try:
+        export_csv(log, sys.stdout, types, notes=notes)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # The reader took what it wanted and left (`| head`): end quietly, like any Unix filter.
+        # Python would flush stdout again at exit and complain: point it at /dev/null first.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0

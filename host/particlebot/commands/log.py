@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from particlebot.commands._common import fail, run_headless, sigterm_as_interrupt, station
+from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError
 
 
@@ -22,6 +23,11 @@ def run(args: argparse.Namespace) -> int:
             deadline = None if args.duration is None else time.monotonic() + args.duration
 
             def until() -> int | None:
+                # Without a console, warnings (a silent port, a reset, a foreign firmware) would
+                # go unseen until someone reads the log.
+                for note in base.model.new_notes():
+                    if note.level != "info":
+                        print(f"{note.level}: {note.text}", flush=True)
                 if base.session.error is not None:
                     return fail(str(base.session.error))
                 if deadline is not None and time.monotonic() >= deadline:
@@ -38,5 +44,5 @@ def run(args: argparse.Namespace) -> int:
                 return run_headless(base.model, until, report=report)
             except KeyboardInterrupt:
                 return 0
-    except RadioError as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))

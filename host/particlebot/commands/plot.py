@@ -10,11 +10,19 @@ from particlebot.commands._common import fail
 from particlebot.plots import PlotInputError, plot_log
 
 
-def write_plot(log: Path, output: Path | None = None) -> int:
-    """Plots log to output (default: next to the log, .png); warnings go to stderr."""
+def write_plot(
+    log: Path,
+    output: Path | None = None,
+    *,
+    run: int | None = None,
+    start: float | None = None,
+    end: float | None = None,
+) -> int:
+    """Plots log (all of it, one run, or a window) to output (default: next to the log, .png);
+    warnings go to stderr."""
     target = output if output is not None else log.with_suffix(".png")
     try:
-        result = plot_log(log, target)
+        result = plot_log(log, target, run=run, start=start, end=end)
     except PlotInputError as exc:
         return fail(str(exc))
     for warning in result.warnings:
@@ -27,4 +35,10 @@ def write_plot(log: Path, output: Path | None = None) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    return write_plot(Path(args.log), Path(args.output) if args.output else None)
+    return write_plot(
+        Path(args.log),
+        Path(args.output) if args.output else None,
+        run=args.run,
+        start=args.start,
+        end=args.end,
+    )

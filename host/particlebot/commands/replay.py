@@ -4,24 +4,27 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
-from particlebot.commands._common import fail, run_headless, station
+from particlebot.commands._common import fail, has_terminal, run_headless, station
 from particlebot.console.app import ConsoleApp
 from particlebot.console.model import state_name
-from particlebot.logs.jsonl import LogFormatError
+from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
 from particlebot.radio import RadioError
 
+PROGRESS_EVERY_S = 2.0
+"""How often a replay without the console says how far it got."""
+
 
 def run(args: argparse.Namespace) -> int:
-    speed = math.inf if args.speed == "max" else float(args.speed)
+    ui = not args.no_ui and has_terminal()
+    # Without a console nobody watches the pace: as fast as possible unless asked otherwise.
+    speed = args.speed if args.speed is not None else (1.0 if ui else math.inf)
     try:
         radio = ReplayRadio(Path(args.log), speed)
-    except (RadioError, LogFormatError) as exc:
+    except (RadioError, LogError) as exc:
         return fail(str(exc))
-    ui = not args.no_ui and sys.stdout.isatty()
     with station(radio, None) as base:
         if ui:
             announced = False
@@ -33,13 +36,35 @@ def run(args: argparse.Namespace) -> int:
                     base.model.note(f"Replay of {args.log} finished; q quits")
                 return None
 
-            app = ConsoleApp(base.model, radio_name=radio.url, log_path=str(args.log), on_tick=tick)
+            app = ConsoleApp(
+                base.model,
+                radio_name=radio.url,
+                log_path=str(args.log),
+                on_tick=tick,
+                read_only=True,
+            )
             try:
                 return app.run() or 0
             except KeyboardInterrupt:
                 return 0
+        pace = "as fast as possible" if math.isinf(speed) else f"at {speed:g}x real time"
+        print(
+            f"Replaying {radio.total_packets} packets ({radio.span_s:.1f} s of log) from "
+            f"{args.log} {pace}",
+            flush=True,
+        )
+
+        def progress() -> None:
+            done = radio.position_s / radio.span_s if radio.span_s > 0 else 1.0
+            print(f"  {done:4.0%}  {radio.position_s:.1f} of {radio.span_s:.1f} s", flush=True)
+
         try:
-            run_headless(base.model, lambda: 0 if radio.finished else None)
+            run_headless(
+                base.model,
+                lambda: 0 if radio.finished else None,
+                report=progress,
+                report_every_s=PROGRESS_EVERY_S,
+            )
         except KeyboardInterrupt:
             return 0
         # Let the receive thread hand over the last packets before summarising.

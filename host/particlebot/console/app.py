@@ -4,31 +4,53 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import ClassVar
 
 from rich.text import Text
+from textual import events
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
+from textual.containers import Vertical
 from textual.css.query import NoMatches
+from textual.screen import ModalScreen
 from textual.widgets import DataTable, Footer, Input, RichLog, Static
 
-from particlebot.console.commands import CommandError, execute, help_text
-from particlebot.console.model import ConsoleModel, ParticleRow, state_name
+from particlebot.console.commands import COMMANDS, CommandError, Prepared, help_text, prepare
+from particlebot.console.model import Campaign, ConsoleModel, ParticleRow, ids_text, state_name
 from particlebot.protocol import UNASSIGNED_ID
 from particlebot.radio import LinkState
+from particlebot.resets import reset_cause
 
+
+@dataclass(frozen=True)
+class Column:
+    key: str
+    label: str
+    width: int
+    """Columns the widest usual cell takes, with the table's padding."""
+    drop_order: int = 0
+    """0: always shown; otherwise, on a narrow screen the highest goes first."""
+
+
+# Shown left to right; on a narrow screen the least needed go first (the hash, whose mismatch is
+# also a flag; then the cycle phase; then the run id), so that 80 columns keep everything a
+# person acts on: state, S_n, light, faults, resets, silence and the flags.
 COLUMNS = [
-    ("id", "ID"),
-    ("state", "STATE"),
-    ("intensity", "INTENSITY"),
-    ("s_n", "S_n"),
-    ("phase", "PHASE"),
-    ("run", "RUN"),
-    ("hash", "FW HASH"),
-    ("bad", "BAD RX"),
-    ("heard", "HEARD"),
-    ("flags", "FLAGS"),
+    Column("id", "ID", 5),
+    Column("state", "STATE", 13),
+    Column("s_n", "S_n", 5),
+    Column("light", "LIGHT", 7),
+    Column("phase", "PHASE", 7, drop_order=3),
+    Column("run", "RUN", 5, drop_order=2),
+    Column("hash", "FW HASH", 10, drop_order=4),
+    Column("bad", "BAD RX", 8, drop_order=1),
+    Column("resets", "RESETS", 13, drop_order=1),
+    Column("heard", "HEARD", 8),
+    Column("flags", "FLAGS", 14),
 ]
+# The table's vertical scrollbar.
+SCROLLBAR = 2
 
 # How often the model's campaigns are advanced: a STOP copy goes out at most this late, and the
 # last of the burst must leave within ~0.35 s of the command for every servo to be contracted
@@ -39,6 +61,32 @@ WELCOME = (
     "Keys: s start  x STOP  p set parameter  i identify  d set id  : command line  ? help  "
     "q quit.  Type 'help' in the command line for every command."
 )
+REPLAY_WELCOME = (
+    "A replay of a log: the table shows what was heard; nothing can be sent.  Keys: ? help  q quit"
+)
+READ_ONLY = "This is a replay of a log: nothing can be sent to the particles."
+START_HINT = (
+    f"{COMMANDS['start'].usage}. Enter alone starts method D; whatever is left out keeps each "
+    "particle's stored setting."
+)
+SET_HINT = f"{COMMANDS['set'].usage}: stored in each particle's EEPROM; 'params' lists them."
+SENDING_ACTIONS = frozenset({"start", "stop", "set_param", "identify", "set_id"})
+
+
+def visible_columns(width: int) -> list[Column]:
+    """The columns that fit a screen width cells wide."""
+    shown = list(COLUMNS)
+    droppable = sorted((c for c in COLUMNS if c.drop_order), key=lambda c: -c.drop_order)
+    for column in droppable:
+        if sum(c.width for c in shown) + SCROLLBAR <= width:
+            break
+        shown.remove(column)
+    return shown
+
+
+def _looks(cell: Text) -> tuple[str, str]:
+    """What a cell shows: its text and its style (Text's == compares the text alone)."""
+    return cell.plain, str(cell.style)
 
 
 def _id_order(cell: Text) -> int:
@@ -53,6 +101,8 @@ def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Te
     mismatch = row.hash_mismatch(model.host_hash)
     age = max(0.0, now - row.last_heard)
     flags: list[str] = []
+    if row.reset_in_run is not None:
+        flags.append(f"RESET in run {row.reset_in_run}")
     if silent:
         flags.append(f"SILENT {age:.0f}s")
     if mismatch:
@@ -63,10 +113,13 @@ def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Te
         bad = [str(k) for k in range(6) if status.sensor_faults >> k & 1]
         flags.append("SENSOR A" + ",A".join(bad))
     dim = "dim" if silent else ""
+    resets = ""
+    if status is not None:
+        resets = f"{status.resets} {reset_cause(status.last_reset_cause)}"
     cells = {
         "id": Text(str(row.id), style="bold"),
         "state": Text(state_name(status.state) if status else "?", style=dim),
-        "intensity": Text("" if row.intensity is None else str(row.intensity), style=dim),
+        "light": Text("" if row.intensity is None else str(row.intensity), style=dim),
         "s_n": Text(str(status.s_n) if status and status.s_n else "-", style=dim),
         "phase": Text(
             f"{status.cycle_phase / 1000:.2f}" if status and status.cycle_phase else "-", style=dim
@@ -77,28 +130,73 @@ def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Te
             style="bold red" if mismatch else dim,
         ),
         "bad": Text(str(row.bad_frames) if row.bad_frames is not None else "", style=dim),
+        "resets": Text(resets, style="bold red" if row.reset_in_run is not None else dim),
         "heard": Text(f"{age:.1f}s", style="bold red" if silent else ""),
         "flags": Text(" ".join(flags), style="bold red" if flags else ""),
     }
     return cells
 
 
+class ConfirmScreen(ModalScreen[str]):
+    """A question answered with one key; Escape answers "cancel"."""
+
+    DEFAULT_CSS = """
+    ConfirmScreen { align: center middle; }
+    #dialog {
+        width: 72; max-width: 100%; height: auto;
+        border: thick $warning; background: $surface; padding: 1 2;
+    }
+    #choices { margin-top: 1; }
+    """
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, question: str, choices: list[tuple[str, str, str]]) -> None:
+        """choices: (key, what it does, the answer dismiss() gives)."""
+        super().__init__()
+        self.question = question
+        self.choices = choices
+
+    def compose(self) -> ComposeResult:
+        lines = Text("\n").join(
+            Text.assemble((f"{key:>3}", "bold"), f"  {text}")
+            for key, text, _ in [*self.choices, ("Esc", "cancel", "cancel")]
+        )
+        with Vertical(id="dialog"):
+            yield Static(Text(self.question, style="bold"), id="question")
+            yield Static(lines, id="choices")
+
+    def on_key(self, event: events.Key) -> None:
+        for key, _, answer in self.choices:
+            if event.key == key:
+                event.stop()
+                self.dismiss(answer)
+                return
+
+    def action_cancel(self) -> None:
+        self.dismiss("cancel")
+
+
 class ConsoleApp(App[int]):
     """Shows a ConsoleModel and sends its commands. `on_tick` (if given) runs with every poll
     of the model (POLL_S) and ends the app when it returns an exit code (the demo's script uses
-    this)."""
+    this). read_only (a replay): nothing can be sent, and the keys that send are not offered."""
 
     TITLE = "particlebot console"
+    # The command palette offers nothing here and would take a place in the footer.
+    ENABLE_COMMAND_PALETTE = False
     CSS = """
-    #status { height: 2; padding: 0 1; background: $boost; }
+    #status {
+        height: 2; padding: 0 1; background: $boost; text-wrap: nowrap; text-overflow: ellipsis;
+    }
     #table { height: 1fr; }
     #messages { height: 9; border-top: solid $primary; }
-    #command { dock: bottom; }
+    #command { height: 1; border: none; padding: 0 1; }
+    #command:focus { background: $boost; }
     """
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "start", "Start"),
         Binding("x", "stop", "STOP"),
-        Binding("p", "set_param", "Set param"),
+        Binding("p", "set_param", "Set"),
         Binding("i", "identify", "Identify"),
         Binding("d", "set_id", "Set id"),
         Binding("colon", "command", "Command"),
@@ -117,6 +215,7 @@ class ConsoleApp(App[int]):
         on_tick: Callable[[], int | None] | None = None,
         linger_s: float = 3.0,
         refresh_s: float = 0.25,
+        read_only: bool = False,
     ) -> None:
         super().__init__()
         self.model = model
@@ -125,33 +224,50 @@ class ConsoleApp(App[int]):
         self.on_tick = on_tick
         self.linger_s = linger_s
         self.refresh_s = refresh_s
-        self._rows: set[str] = set()
+        self.read_only = read_only
+        self._rows: dict[str, dict[str, Text]] = {}
+        """The cells each row shows now, by row key: only those that changed are redrawn."""
+        self._columns: list[Column] = []
         self._ending = False
+        self._quit_after: Campaign | None = None
+        """The STOP that quitting waits for (q then y while particles move)."""
 
     def compose(self) -> ComposeResult:
         yield Static(id="status")
         yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
         yield RichLog(id="messages", wrap=True, markup=False)
+        # Not select_on_focus: a prefilled command is completed, not typed over.
         yield Input(
             placeholder="command (Enter sends, Esc goes back to the table; 'help' lists them)",
             id="command",
+            select_on_focus=False,
         )
-        yield Footer()
+        footer = Footer()
+        footer.compact = True
+        yield footer
 
     def on_mount(self) -> None:
-        table = self.query_one("#table", DataTable)
-        for key, label in COLUMNS:
-            table.add_column(label, key=key)
-        table.focus()
-        self.query_one("#messages", RichLog).write(Text(WELCOME, style="bold"))
+        self.query_one("#table", DataTable).focus()
+        welcome = REPLAY_WELCOME if self.read_only else WELCOME
+        self.query_one("#messages", RichLog).write(Text(welcome, style="bold"))
+        self._fit_columns(self.size.width)
         self.refresh_view()
         self.set_interval(self.refresh_s, self.refresh_view)
         self.set_interval(POLL_S, self._tick)
+
+    def on_resize(self, event: events.Resize) -> None:
+        self._fit_columns(event.size.width)
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        # A replay cannot send: its keys are not offered at all.
+        return not (self.read_only and action in SENDING_ACTIONS)
 
     # ---- periodic --------------------------------------------------------------------------
 
     def _tick(self) -> None:
         self.model.poll()
+        if self._quit_after is not None and self._quit_after.done:
+            self.exit(0)
         if self.on_tick is not None and not self._ending:
             code = self.on_tick()
             if code is not None:
@@ -163,32 +279,56 @@ class ConsoleApp(App[int]):
         with contextlib.suppress(NoMatches):
             self._refresh_view()
 
-    def _refresh_view(self) -> None:
+    def _status_text(self) -> Text:
         model = self.model
-        now = model.clock()
         link = Text("connected", style="green")
         if model.link is not None and model.link.state in (LinkState.LOST, LinkState.CLOSED):
             link = Text(model.link.state.value.upper(), style="bold red")
-        status = self.query_one("#status", Static)
-        status.update(
-            Text.assemble(
-                f"radio {self.radio_name} [",
-                link,
-                f"]   log {self.log_path or '(none)'}   host protocol {model.host_hash:08X}\n",
-                model.counters_text(),
-            )
+        rows = model.rows()
+        silent = sum(1 for row in rows if row.silent(model.clock(), model.silent_after))
+        count = f"{len(rows)} particle{'' if len(rows) == 1 else 's'}"
+        if silent:
+            count += f" ({silent} silent)"
+        # Each line is cut rather than wrapped: a wrapped first line would push the counters of
+        # bad frames out of the two lines the bar has.
+        text = Text.assemble(
+            f"{self.radio_name} [",
+            link,
+            f"]  {count}  log {self.log_path or '(none)'}  host protocol {model.host_hash:08X}\n",
+            model.counters_text(),
         )
+        return text
+
+    def _fit_columns(self, width: int) -> None:
+        columns = visible_columns(width)
+        if columns == self._columns:
+            return
+        self._columns = columns
+        with contextlib.suppress(NoMatches):
+            table = self.query_one("#table", DataTable)
+            table.clear(columns=True)
+            for column in columns:
+                table.add_column(column.label, key=column.key)
+            self._rows.clear()
+            self.refresh_view()
+
+    def _refresh_view(self) -> None:
+        model = self.model
+        now = model.clock()
+        self.query_one("#status", Static).update(self._status_text())
         table = self.query_one("#table", DataTable)
         added = False
         for row in model.rows():
             cells = row_cells(row, now, model)
-            if row.key not in self._rows:
-                table.add_row(*(cells[key] for key, _ in COLUMNS), key=row.key)
-                self._rows.add(row.key)
+            shown = self._rows.get(row.key)
+            if shown is None:
+                table.add_row(*(cells[c.key] for c in self._columns), key=row.key)
                 added = True
             else:
-                for key, _ in COLUMNS:
-                    table.update_cell(row.key, key, cells[key], update_width=True)
+                for column in self._columns:
+                    if _looks(cells[column.key]) != _looks(shown[column.key]):
+                        table.update_cell(row.key, column.key, cells[column.key], update_width=True)
+            self._rows[row.key] = cells
         if added:
             # Particles are heard in any order; a person looks them up by id.
             table.sort("id", key=_id_order)
@@ -199,7 +339,14 @@ class ConsoleApp(App[int]):
 
     # ---- actions ---------------------------------------------------------------------------
 
-    def _prefill(self, text: str) -> None:
+    def _write(self, text: str | Text, style: str = "") -> None:
+        self.query_one("#messages", RichLog).write(
+            text if isinstance(text, Text) else Text(text, style=style)
+        )
+
+    def _prefill(self, text: str, hint: str | None = None) -> None:
+        if hint is not None:
+            self._write(hint, "dim")
         command = self.query_one("#command", Input)
         command.value = text
         command.cursor_position = len(text)
@@ -214,13 +361,15 @@ class ConsoleApp(App[int]):
         return None if row is None else row.id
 
     def action_start(self) -> None:
-        self._prefill("start D cycle=150 wave=0 update=0 phototaxis=0")
+        # Only what a person types changes a particle's stored settings: Enter alone sends the
+        # default method with every option left to the particles.
+        self._prefill("start ", START_HINT)
 
     def action_stop(self) -> None:
         self._run("stop")
 
     def action_set_param(self) -> None:
-        self._prefill("set cycle_steps 150 all")
+        self._prefill("set ", SET_HINT)
 
     def action_identify(self) -> None:
         selected = self._selected_id()
@@ -234,30 +383,101 @@ class ConsoleApp(App[int]):
         self._prefill("")
 
     def action_help(self) -> None:
-        self.query_one("#messages", RichLog).write(help_text())
+        self._write(help_text())
 
     def action_leave_command(self) -> None:
         self.query_one("#table", DataTable).focus()
 
-    def on_input_submitted(self, event: Input.Submitted) -> None:
+    async def action_quit(self) -> None:
+        """Quits; while particles move, first asks whether to STOP them."""
+        if self._quit_after is not None or isinstance(self.screen, ConfirmScreen):
+            self.exit(0)  # asked twice: the person means it
+            return
+        moving = [] if self.read_only else self.model.moving_ids()
+        if not moving:
+            self.exit(0)
+            return
+
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
+                self._run("stop")
+                self._quit_after = self.model.last("STOP")
+                self._write(
+                    "Quitting once every particle confirms STOP (at most "
+                    f"{self.model.stop_timeout:.0f} s); q quits at once",
+                    "yellow",
+                )
+            elif answer == "quit":
+                self.exit(0)
+
+        self._ask_about_run(
+            moving,
+            "Send STOP before quitting?",
+            [
+                ("y", "send STOP, then quit once they confirm it", "stop"),
+                ("n", "quit and leave them running", "quit"),
+            ],
+            answered,
+        )
+
+    async def on_input_submitted(self, event: Input.Submitted) -> None:
         line = event.value.strip()
         event.input.value = ""
         self.query_one("#table", DataTable).focus()
         if line.lower() in ("quit", "exit", "q"):
-            self.exit(0)
+            await self.action_quit()
             return
         self._run(line)
 
     def _run(self, line: str) -> None:
-        log = self.query_one("#messages", RichLog)
         if not line:
             return
-        log.write(Text(f"> {line}", style="bold cyan"))
+        self._write(f"> {line}", "bold cyan")
         try:
-            reply = execute(self.model, line)
+            prepared = prepare(self.model, line)
         except CommandError as exc:
-            log.write(Text(str(exc), style="bold red"))
+            self._write(str(exc), "bold red")
             return
+        if prepared is None:
+            return
+        if self.read_only and prepared.sends:
+            self._write(READ_ONLY, "bold red")
+            return
+        moving = self.model.moving_ids()
+        if prepared.name == "start" and moving:
+
+            def answered(answer: str | None) -> None:
+                if answer == "restart":
+                    self._carry_out(prepared)
+                else:
+                    self._write("START not sent; the run goes on", "yellow")
+
+            self._ask_about_run(
+                moving,
+                "Restart with this START?",
+                [
+                    ("y", "restart: each particle estimates afresh and starts over", "restart"),
+                    ("n", "keep the run going", "cancel"),
+                ],
+                answered,
+            )
+            return
+        self._carry_out(prepared)
+
+    def _ask_about_run(
+        self,
+        moving: list[int],
+        question: str,
+        choices: list[tuple[str, str, str]],
+        answered: Callable[[str | None], None],
+    ) -> None:
+        """Asks, naming the particles in a run, what to do about them."""
+        many = len(moving) > 1
+        who = f"Particle{'s' if many else ''} {ids_text(moving)} {'are' if many else 'is'}"
+        self.push_screen(ConfirmScreen(f"{who} in a run. {question}", choices), answered)
+
+    def _carry_out(self, prepared: Prepared) -> None:
+        reply = prepared.run()
         if reply:
-            log.write(reply)
+            self._write(reply)
         self.refresh_view()

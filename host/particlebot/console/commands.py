@@ -23,6 +23,20 @@ class CommandError(ValueError):
 
 
 @dataclass(frozen=True)
+class Prepared:
+    """A command line understood and checked, not yet carried out: the console can ask for a
+    confirmation (restarting a run) before run() sends anything."""
+
+    name: str
+    run: Callable[[], str]
+
+    @property
+    def sends(self) -> bool:
+        """Whether it sends to the particles (a replay cannot)."""
+        return self.name in SENDING
+
+
+@dataclass(frozen=True)
 class CommandHelp:
     usage: str
     summary: str
@@ -33,7 +47,8 @@ COMMANDS: dict[str, CommandHelp] = {
         "start [A|B|C|D] [cycle=STEPS] [wave=N] [update=S] [phototaxis=0|1]",
         "start a run: estimation method A direct, B linear, C nonlinear, D counting (default D); "
         "cycle = servo steps of 20 ms per cycle, wave = N of eq. 3, update = seconds between "
-        "re-estimations (0 keeps each particle's stored value; wave 0 = automatic)",
+        "re-estimations; left out (or 0), cycle and update keep each particle's stored value "
+        "and wave is automatic",
     ),
     "stop": CommandHelp(
         "stop",
@@ -110,7 +125,7 @@ def _check_range(value: int, param: Param, what: str, zero_ok: bool) -> None:
         raise CommandError(f"{what} must be {spec.min}..{spec.max}{extra}, not {value}")
 
 
-def _start(model: ConsoleModel, args: list[str]) -> str:
+def _start(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     method = Method.COUNTING
     options = {"cycle": 0, "wave": 0, "update": 0, "phototaxis": 0}
     aliases = {"photo": "phototaxis", "cycle_steps": "cycle", "wave_size": "wave"}
@@ -130,56 +145,76 @@ def _start(model: ConsoleModel, args: list[str]) -> str:
     _check_range(options["wave"], Param.WAVE_SIZE, "wave", zero_ok=True)
     if options["phototaxis"] not in (0, 1):
         raise CommandError("phototaxis must be 0 or 1")
-    campaign = model.start(
-        method,
-        cycle_steps=options["cycle"],
-        wave_size=options["wave"],
-        update_interval_s=options["update"],
-        phototaxis=bool(options["phototaxis"]),
-    )
-    return (
-        f"START run {model.run_id} method {method.name} sent to {len(campaign.pending)} "
-        "known particle(s); asking each (PING) until it confirms, resending to any that missed it"
-    )
+
+    def send() -> str:
+        campaign = model.start(
+            method,
+            cycle_steps=options["cycle"],
+            wave_size=options["wave"],
+            update_interval_s=options["update"],
+            phototaxis=bool(options["phototaxis"]),
+        )
+        return (
+            f"START run {model.run_id} method {method.name} sent to {len(campaign.pending)} "
+            "known particle(s); asking each (PING) until it confirms, resending to any that "
+            "missed it"
+        )
+
+    return send
 
 
-def _stop(model: ConsoleModel, args: list[str]) -> str:
-    campaign = model.stop()
-    return (
-        f"STOP sent ({len(campaign.burst)} copies in {campaign.burst[-1]:.1f} s); repeating "
-        f"until all {len(campaign.pending)} known particle(s) report it"
-    )
+def _stop(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+    def send() -> str:
+        campaign = model.stop()
+        return (
+            f"STOP sent ({len(campaign.burst)} copies in {campaign.burst[-1]:.1f} s); repeating "
+            f"until all {len(campaign.pending)} known particle(s) report it"
+        )
+
+    return send
 
 
-def _set(model: ConsoleModel, args: list[str]) -> str:
+def _set(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     if len(args) not in (2, 3):
         raise CommandError(f"usage: {COMMANDS['set'].usage}")
     param = parse_param(args[0])
     value = _int(args[1], "VALUE")
     _check_range(value, param, param.name.lower(), zero_ok=False)
     target = parse_target(args[2] if len(args) == 3 else None)
-    model.set_param(param, value, target)
-    return f"SET_PARAM {param.name} = {value} sent to {_target_text(target)}"
+
+    def send() -> str:
+        model.set_param(param, value, target)
+        return f"SET_PARAM {param.name} = {value} sent to {_target_text(target)}"
+
+    return send
 
 
-def _get(model: ConsoleModel, args: list[str]) -> str:
+def _get(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     if len(args) not in (1, 2):
         raise CommandError(f"usage: {COMMANDS['get'].usage}")
     param = parse_param(args[0])
     target = parse_target(args[1] if len(args) == 2 else None)
-    model.get_param(param, target)
-    return f"GET_PARAM {param.name} sent to {_target_text(target)}"
+
+    def send() -> str:
+        model.get_param(param, target)
+        return f"GET_PARAM {param.name} sent to {_target_text(target)}"
+
+    return send
 
 
-def _identify(model: ConsoleModel, args: list[str]) -> str:
+def _identify(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     if len(args) != 1:
         raise CommandError(f"usage: {COMMANDS['identify'].usage}")
     target = parse_target(args[0])
-    model.identify(target)
-    return f"IDENTIFY sent to {_target_text(target)}"
+
+    def send() -> str:
+        model.identify(target)
+        return f"IDENTIFY sent to {_target_text(target)}"
+
+    return send
 
 
-def _setid(model: ConsoleModel, args: list[str]) -> str:
+def _setid(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     if len(args) != 2:
         raise CommandError(f"usage: {COMMANDS['setid'].usage}")
     target = parse_target(args[0], allow_all=False)
@@ -188,21 +223,40 @@ def _setid(model: ConsoleModel, args: list[str]) -> str:
         raise CommandError("SET_ID must name one particle, never broadcast")
     if not 1 <= new_id <= 253:
         raise CommandError(f"NEW_ID must be 1..253, not {new_id}")
-    model.set_id(target, new_id)
-    return f"SET_ID {target} -> {new_id} sent"
+
+    def send() -> str:
+        model.set_id(target, new_id)
+        return f"SET_ID {target} -> {new_id} sent"
+
+    return send
 
 
-def _ping(model: ConsoleModel, args: list[str]) -> str:
+def _ping(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     target = parse_target(args[0] if args else None)
-    model.ping(target)
-    return f"PING sent to {_target_text(target)}"
+
+    def send() -> str:
+        model.ping(target)
+        return f"PING sent to {_target_text(target)}"
+
+    return send
+
+
+def _show(text: Callable[[], str]) -> Callable[[ConsoleModel, list[str]], Callable[[], str]]:
+    """A command that only shows text."""
+    return lambda model, args: text
 
 
 def _target_text(target: int) -> str:
     return "all particles" if target == BROADCAST_ID else f"particle {target}"
 
 
-_HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], str]] = {
+def _help(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+    text = help_text(args[0] if args else None)  # an unknown command is an error now
+    return lambda: text
+
+
+# Each handler checks its arguments (CommandError) and returns what carries the command out.
+_HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], Callable[[], str]]] = {
     "start": _start,
     "stop": _stop,
     "set": _set,
@@ -210,24 +264,29 @@ _HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], str]] = {
     "identify": _identify,
     "setid": _setid,
     "ping": _ping,
-    "params": lambda model, args: params_text(),
-    "help": lambda model, args: help_text(args[0] if args else None),
+    "params": _show(params_text),
+    "help": _help,
 }
+SENDING = frozenset({"start", "stop", "set", "get", "identify", "setid", "ping"})
 
 
-def execute(model: ConsoleModel, line: str) -> str:
-    """Runs one command line; returns what to show. CommandError if it is not understood.
-
-    `quit` is the UI's business and is not handled here.
-    """
+def prepare(model: ConsoleModel, line: str) -> Prepared | None:
+    """Understands and checks one command line without carrying it out; None for a blank line,
+    CommandError if it is not understood. `quit` is the UI's business and is not handled here."""
     try:
         words = shlex.split(line)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     if not words:
-        return ""
+        return None
     name, args = words[0].lower(), words[1:]
     handler = _HANDLERS.get(name)
     if handler is None:
         raise CommandError(f"Unknown command '{name}'. Type 'help' for the list.")
-    return handler(model, args)
+    return Prepared(name, handler(model, args))
+
+
+def execute(model: ConsoleModel, line: str) -> str:
+    """Runs one command line; returns what to show. CommandError if it is not understood."""
+    prepared = prepare(model, line)
+    return "" if prepared is None else prepared.run()

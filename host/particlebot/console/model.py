@@ -29,13 +29,24 @@ from particlebot.protocol import (
     Status,
     Stop,
 )
-from particlebot.radio import LinkEvent, LinkState, Packet, RadioError
+from particlebot.radio import LinkEvent, LinkState, Packet, RadioError, ReadOnlyRadioError
+from particlebot.resets import ADVICE, reset_between, reset_cause
 from particlebot.session import Dropped, Listener, ReceivedFrame, SentFrame
 
 # STATUS comes every STATUS_PERIOD_MS (2 s by default, +-25 %): three missed ones mean trouble.
 SILENT_AFTER_S = 6.5
 STOPPED_STATES = frozenset({State.IDLE, State.DONE})
 OBEYED_STOP_STATES = frozenset({State.STOPPING, State.IDLE, State.DONE})
+MOVING_STATES = frozenset({State.ESTIMATING, State.WAITING, State.CYCLING, State.PAUSED})
+"""A particle in one of these is in a run: quitting or restarting would leave it, or cut it."""
+RUN_STATES = MOVING_STATES | {State.STOPPING}
+# A particle answers a broadcast SET_PARAM or GET_PARAM in a random one of 10 slots of 60 ms;
+# its PARAM_VALUE (15 bytes) then queues behind the others' on the base station's 9600-baud
+# link. Two seconds leave room for that and for a radio that repeats a packet.
+PARAM_REPLY_TIMEOUT_S = 2.0
+# Particles send STATUS every 2 s: hearing nothing at all for longer than two of those means the
+# link, not the swarm, is the likelier problem.
+QUIET_HINT_S = 5.0
 # The firmware's stop ramp lasts at most 600 ms, so a particle must have STOP within ~0.35 s of
 # the command for its servo to be contracted within 1 s. Four copies 0.1 s apart reach a
 # particle unless all four are lost: 0.16 % of the time at 20 % loss. Each copy that reaches a
@@ -85,6 +96,8 @@ class ParticleRow:
     status_time: float | None = None
     intensity: int | None = None
     params: dict[int, tuple[int, int]] = field(default_factory=dict)
+    reset_in_run: int | None = None
+    """The run during which the particle reset (cleared by the next START)."""
 
     @property
     def state(self) -> State | None:
@@ -100,6 +113,10 @@ class ParticleRow:
 
     def hash_mismatch(self, host_hash: int = DEFINITION_HASH) -> bool:
         return self.status is not None and self.status.definition_hash != host_hash
+
+    @property
+    def moving(self) -> bool:
+        return self.state in MOVING_STATES
 
     @property
     def bad_frames(self) -> int | None:
@@ -135,6 +152,7 @@ class Campaign:
     pings: dict[str, int] = field(default_factory=dict)
     """PINGs sent to each particle (by key)."""
     next_send: float = 0.0
+    send_failures: int = 0
     done: bool = False
     success: bool = False
     outcome: str = ""
@@ -143,6 +161,60 @@ class Campaign:
     @property
     def burst_sent(self) -> bool:
         return self.rounds >= len(self.burst)
+
+
+@dataclass
+class ParamQuery:
+    """A SET_PARAM or GET_PARAM waiting for its PARAM_VALUE answers. Answers to a broadcast are
+    summarised in one note once every particle known when it went out answered, or at its timeout,
+    rather than shown one line per particle."""
+
+    kind: str  # "SET" or "GET"
+    param: int
+    value: int | None
+    target: int
+    started: float
+    expected: set[int]
+    replies: dict[int, tuple[int, int]] = field(default_factory=dict)
+    """particle id -> (ParamResult, value)"""
+    done: bool = False
+
+    def accepts(self, sender: int, param: int) -> bool:
+        return (
+            not self.done
+            and param == self.param
+            and (self.target == BROADCAST_ID or self.target == sender)
+        )
+
+    def summary(self, timeout: float) -> str:
+        """e.g. "SET CYCLE_STEPS = 300: 8/10 OK; BUSY: 3, 7 (STOP them first)"."""
+        name = param_name(self.param)
+        head = f"{self.kind} {name}" + (f" = {self.value}" if self.kind == "SET" else "")
+        if self.target != BROADCAST_ID:
+            head = f"{head} to particle {self.target}"
+        missing = sorted(self.expected - set(self.replies))
+        if not self.replies:
+            if self.target != BROADCAST_ID:
+                return f"{head}: no answer within {timeout:g} s"
+            return f"{head}: no particle answered within {timeout:g} s"
+        parts: list[str] = []
+        if self.kind == "SET":
+            ok = [i for i, (result, _) in self.replies.items() if result == ParamResult.OK]
+            parts.append(f"{len(ok)}/{len(self.expected | set(self.replies))} OK")
+            for result in sorted({r for r, _ in self.replies.values()} - {ParamResult.OK}):
+                ids = [i for i, (r, _) in self.replies.items() if r == result]
+                advice = " (STOP them first)" if result == ParamResult.BUSY else ""
+                parts.append(f"{result_name(result)}: {ids_text(ids)}{advice}")
+        else:
+            by_value: dict[tuple[int, int], list[int]] = {}
+            for particle, answer in self.replies.items():
+                by_value.setdefault(answer, []).append(particle)
+            for (result, value), ids in sorted(by_value.items(), key=lambda item: -len(item[1])):
+                shown = str(value) if result == ParamResult.OK else result_name(result)
+                parts.append(f"{shown} on {ids_text(ids)}")
+        if missing:
+            parts.append(f"no answer from {ids_text(missing)}")
+        return f"{head}: " + "; ".join(parts)
 
 
 @dataclass(frozen=True)
@@ -162,6 +234,22 @@ def _ids_text(rows: list[ParticleRow]) -> str:
     return ", ".join(str(row.id) for row in sorted(rows, key=lambda r: r.id))
 
 
+def ids_text(ids: list[int] | set[int]) -> str:
+    """Particle ids with runs shortened: "1-6, 9, 10"."""
+    ordered = sorted(set(ids))
+    parts: list[str] = []
+    start = 0
+    for index in range(1, len(ordered) + 1):
+        if index == len(ordered) or ordered[index] != ordered[index - 1] + 1:
+            first, last = ordered[start], ordered[index - 1]
+            if last - first >= 2:
+                parts.append(f"{first}-{last}")
+            else:
+                parts.extend(str(i) for i in range(first, last + 1))
+            start = index
+    return ", ".join(parts)
+
+
 class ConsoleModel(Listener):
     """Per-particle state from the frames a session delivers, and the commands a person gives."""
 
@@ -178,7 +266,12 @@ class ConsoleModel(Listener):
         start_interval: float = 0.5,
         start_timeout: float = 8.0,
         max_pings: int = MAX_PINGS,
+        param_timeout: float = PARAM_REPLY_TIMEOUT_S,
+        quiet_hint: str | None = None,
+        quiet_after: float | None = None,
     ) -> None:
+        """quiet_hint: shown once when nothing at all has been heard for quiet_after seconds (what
+        to check on this kind of radio: its baud, PAN ID and channel)."""
         self.sink = sink
         self.clock = clock
         self.host_hash = host_hash
@@ -191,6 +284,13 @@ class ConsoleModel(Listener):
         self.start_interval = start_interval
         self.start_timeout = start_timeout
         self.max_pings = max_pings
+        self.param_timeout = param_timeout
+        self.quiet_hint = quiet_hint
+        self.quiet_after = QUIET_HINT_S if quiet_after is None else quiet_after
+        self.opened_at = clock()
+        self.queries: list[ParamQuery] = []
+        self.run_active = False
+        """A START went out and no STOP since."""
         self.particles: dict[str, ParticleRow] = {}
         self.notes: deque[ModelNote] = deque(maxlen=500)
         self.notes_written = 0
@@ -239,13 +339,17 @@ class ConsoleModel(Listener):
                 row.intensity = message.intensity
             elif isinstance(message, ParamValue):
                 row.params[message.param] = (message.result, message.value)
-                self._note(_param_text(row.id, message))
-        self.poll(received.time)
+                self._on_param_value(row, message, received.time)
+        # Campaigns advance in poll(), on the caller's thread: commands never go out from the
+        # receive thread, which must keep reading the radio.
 
     def _on_status(self, row: ParticleRow, status: Status, at: float) -> None:
         first_mismatch = status.definition_hash != self.host_hash and (
             row.status is None or row.status.definition_hash == self.host_hash
         )
+        previous = row.status
+        if previous is not None and reset_between(previous, status):
+            self._on_reset(row, previous, status)
         row.status = status
         row.status_time = at
         row.intensity = status.intensity
@@ -256,6 +360,47 @@ class ConsoleModel(Listener):
                 "it (or update the host) before trusting its fields.",
                 "warning",
             )
+
+    def _on_reset(self, row: ParticleRow, before: Status, after: Status) -> None:
+        cause = reset_cause(after.last_reset_cause)
+        why = f"{cause}: {ADVICE[cause]}" if cause in ADVICE else cause
+        if before.state in RUN_STATES or self.run_active:
+            run = before.run_id if before.state in RUN_STATES else self.run_id
+            row.reset_in_run = run
+            self._note(
+                f"Particle {row.id} reset during run {run} ({why}); it is "
+                f"{state_name(after.state)} now, out of the run",
+                "error",
+            )
+        else:
+            self._note(f"Particle {row.id} reset ({why})", "warning")
+
+    def _on_param_value(self, row: ParticleRow, message: ParamValue, at: float) -> None:
+        for query in reversed(self.queries):
+            if query.accepts(row.id, message.param):
+                query.replies[row.id] = (message.result, message.value)
+                # With no particle known when it went out, only the timeout ends a broadcast.
+                everyone = bool(query.expected) and query.expected <= set(query.replies)
+                if query.target != BROADCAST_ID or everyone:
+                    self._conclude_query(query)
+                return
+        # Nobody here asked (another console, a late answer): one line of its own.
+        self._note(_param_text(row.id, message))
+
+    def _conclude_query(self, query: ParamQuery) -> None:
+        query.done = True
+        if query.target != BROADCAST_ID and query.replies:
+            result, value = query.replies[query.target]
+            text = f"Particle {query.target}: {param_name(query.param)} = {value} "
+            text += f"({result_name(result)})"
+            self._note(text, "info" if result == ParamResult.OK else "warning")
+            return
+        everyone_ok = query.replies and all(
+            result == ParamResult.OK for result, _ in query.replies.values()
+        )
+        complete = query.expected <= set(query.replies)
+        level = "info" if everyone_ok and complete else "warning"
+        self._note(query.summary(self.param_timeout), level)
 
     def on_dropped(self, dropped: Dropped) -> None:
         with self._lock:
@@ -279,6 +424,12 @@ class ConsoleModel(Listener):
     def rows(self) -> list[ParticleRow]:
         with self._lock:
             return sorted(self.particles.values(), key=lambda row: (row.id, row.key))
+
+    def moving_ids(self) -> list[int]:
+        """Ids of the particles whose latest STATUS shows them in a run (estimating, waiting,
+        cycling or pausing), silent ones included: nothing says they stopped."""
+        with self._lock:
+            return sorted({row.id for row in self.particles.values() if row.moving})
 
     def new_notes(self) -> list[ModelNote]:
         """Notes added since the previous call (for a UI that appends them to a log pane)."""
@@ -321,6 +472,9 @@ class ConsoleModel(Listener):
         with self._lock:
             self._cancel("STOP")
             self._cancel("START")
+            self.run_active = True
+            for row in self.particles.values():
+                row.reset_in_run = None
             reported = [row.status.run_id for row in self.particles.values() if row.status]
             self.run_id = (max([self.run_id, *reported]) % 255) + 1
             message = Start(
@@ -359,6 +513,7 @@ class ConsoleModel(Listener):
         with self._lock:
             self._cancel("START")
             self._cancel("STOP")
+            self.run_active = False
 
             def confirms(row: ParticleRow, since: float) -> bool:
                 return _fresh(row, since) and row.state in STOPPED_STATES
@@ -376,11 +531,26 @@ class ConsoleModel(Listener):
                 needs_command,
             )
 
-    def set_param(self, param: int, value: int, target: int = BROADCAST_ID) -> None:
-        self._send_once(SetParam(target=target, param=param, value=value))
+    def set_param(self, param: int, value: int, target: int = BROADCAST_ID) -> ParamQuery:
+        """Sends SET_PARAM; the answers are summarised in one note (see ParamQuery)."""
+        return self._query("SET", SetParam(target=target, param=param, value=value), value)
 
-    def get_param(self, param: int, target: int = BROADCAST_ID) -> None:
-        self._send_once(GetParam(target=target, param=param))
+    def get_param(self, param: int, target: int = BROADCAST_ID) -> ParamQuery:
+        """Sends GET_PARAM; the answers are summarised in one note (see ParamQuery)."""
+        return self._query("GET", GetParam(target=target, param=param), None)
+
+    def _query(self, kind: str, message: SetParam | GetParam, value: int | None) -> ParamQuery:
+        with self._lock:
+            if message.target == BROADCAST_ID:
+                expected = {row.id for row in self.particles.values()}
+            else:
+                expected = {message.target}
+            query = ParamQuery(kind, message.param, value, message.target, self.clock(), expected)
+            if self._send(message):
+                self.queries = [*(q for q in self.queries if not q.done), query]
+            else:
+                query.done = True
+            return query
 
     def identify(self, target: int = BROADCAST_ID) -> None:
         self._send_once(Identify(target=target))
@@ -403,6 +573,14 @@ class ConsoleModel(Listener):
             for campaign in self.campaigns:
                 if not campaign.done:
                     self._advance(campaign, at)
+            for query in self.queries:
+                if not query.done and at - query.started >= self.param_timeout - CLOCK_SLACK_S:
+                    self._conclude_query(query)
+            quiet = self.packets == 0 and at - self.opened_at >= self.quiet_after
+            if self.quiet_hint is not None and quiet:
+                hint = f"Nothing heard for {self.quiet_after:g} s. {self.quiet_hint}"
+                self._note(hint, "warning")
+                self.quiet_hint = None
 
     # ---- internals -------------------------------------------------------------------------
 
@@ -495,11 +673,11 @@ class ConsoleModel(Listener):
         rows = [self.particles[key] for key in campaign.pending]
         in_burst = index < len(campaign.burst)
         wanted = in_burst or any(campaign.needs_command(row, campaign.started) for row in rows)
-        if wanted and not self._send(campaign.command):
+        if wanted and not self._send(campaign.command, campaign):
             return
         if campaign.burst_sent:
             for target in self._ping_targets(campaign):
-                if not self._send(Ping(target=target)):
+                if not self._send(Ping(target=target), campaign):
                     return
 
     def _ping_targets(self, campaign: Campaign) -> list[int]:
@@ -519,27 +697,39 @@ class ConsoleModel(Listener):
             campaign.pings[key] = campaign.pings.get(key, 0) + 1
         return targets
 
-    def _finish(self, campaign: Campaign, now: float, success: bool, text: str) -> None:
+    def _finish(
+        self, campaign: Campaign, now: float, success: bool, text: str, *, log: bool = True
+    ) -> None:
         campaign.done = True
         campaign.success = success
         campaign.outcome = text
         campaign.finished_at = now
-        self._note(text, "info" if success else "error")
+        if log:
+            self._note(text, "info" if success else "error")
 
     def _send_once(self, message: Message) -> None:
         with self._lock:
             self._send(message)
 
-    def _send(self, message: Message) -> bool:
+    def _send(self, message: Message, campaign: Campaign | None = None) -> bool:
+        """Sends message; a failure is noted once per campaign (not once per resend), and ends
+        the campaign when the radio can never send (a replay)."""
         if self.sink is None:
-            self._note("Nothing can be sent: no radio", "error", log=False)
-            return False
-        try:
-            self.sink.send(message)
-        except RadioError as exc:
-            self._note(f"Could not send {type(message).__name__}: {exc}", "error", log=False)
-            return False
-        return True
+            error: RadioError = ReadOnlyRadioError("Nothing can be sent: no radio")
+        else:
+            try:
+                self.sink.send(message)
+                return True
+            except RadioError as exc:
+                error = exc
+        name = type(message).__name__.upper()
+        if campaign is None or not campaign.send_failures:
+            self._note(f"Could not send {name}: {error}", "error", log=False)
+        if campaign is not None:
+            campaign.send_failures += 1
+            if isinstance(error, ReadOnlyRadioError):
+                self._finish(campaign, self.clock(), False, f"{campaign.name} not sent", log=False)
+        return False
 
     def _note(self, text: str, level: str = "info", *, log: bool = True) -> None:
         self.notes.append(ModelNote(self.clock(), text, level))
@@ -548,9 +738,13 @@ class ConsoleModel(Listener):
             self.sink.note(text)
 
 
-def _param_text(particle: int, message: ParamValue) -> str:
+def result_name(value: int) -> str:
     try:
-        result = ParamResult(message.result).name
+        return ParamResult(value).name
     except ValueError:
-        result = f"result {message.result}"
+        return f"result {value}"
+
+
+def _param_text(particle: int, message: ParamValue) -> str:
+    result = result_name(message.result)
     return f"Particle {particle}: {param_name(message.param)} = {message.value} ({result})"

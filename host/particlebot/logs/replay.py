@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 from typing import Self
 
-from particlebot.logs.jsonl import read_log
+from particlebot.logs.jsonl import LogError, RecordReader, load_log
 from particlebot.radio import (
     InvalidRadioUrlError,
     LinkState,
@@ -26,22 +26,22 @@ class ReplayRadio(Radio):
 
     def __init__(self, path: Path, speed: float = 1.0, *, url: str | None = None) -> None:
         super().__init__(url or f"replay://{path}")
-        if speed <= 0:
+        if not speed > 0:  # NaN too
             raise InvalidRadioUrlError(f"{self.url}: speed must be positive (or max)")
         self.path = path
         self.speed = speed
         self._items: list[tuple[float, Packet | tuple[LinkState, str]]] = []
-        try:
-            records = list(read_log(path))
-        except FileNotFoundError:
-            raise InvalidRadioUrlError(f"No log file {path}") from None
-        for record in records:
-            at = float(record.get("t", 0.0))
-            if record.get("kind") == "rx":
-                source = record.get("src")
-                data = bytes.fromhex(record.get("hex", ""))
+        for number, record in load_log(path):
+            kind = record.get("kind")
+            if kind == "rx":
+                fields = RecordReader(path, number, record)
+                at = fields.number("t")
+                data = fields.hex_bytes("hex")
+                source = fields.optional_text("src")
                 self._items.append((at, Packet(data=data, source=source, time=at)))
-            elif record.get("kind") == "link" and record.get("state") in ("lost", "connected"):
+            elif kind == "link" and record.get("state") in ("lost", "connected"):
+                fields = RecordReader(path, number, record)
+                at = fields.number("t")
                 self._items.append((at, (LinkState(record["state"]), str(record.get("text", "")))))
         self.start_time = self._items[0][0] if self._items else time.time()
         self._next = 0
@@ -52,11 +52,24 @@ class ReplayRadio(Radio):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         url.check_options({"speed"})
-        return cls(Path(url.target), url.get_speed(), url=url.text)
+        try:
+            return cls(Path(url.target), url.get_speed(), url=url.text)
+        except LogError as exc:
+            raise InvalidRadioUrlError(str(exc)) from None
 
     @property
     def finished(self) -> bool:
         return self._next >= len(self._items)
+
+    @property
+    def span_s(self) -> float:
+        """Seconds of the log from its first to its last replayed item."""
+        return self._items[-1][0] - self.start_time if self._items else 0.0
+
+    @property
+    def position_s(self) -> float:
+        """How far into span_s the replay has got."""
+        return self._clock - self.start_time
 
     @property
     def total_packets(self) -> int:

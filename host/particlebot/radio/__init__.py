@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import enum
 import importlib
-import math
 import threading
 import time
 from abc import ABC, abstractmethod
@@ -13,6 +12,8 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Self
 from urllib.parse import parse_qsl, urlsplit
+
+from particlebot.options import ANY, SPEED, Bounds, OptionError, parse_float, parse_int
 
 __all__ = [
     "BACKENDS",
@@ -115,30 +116,29 @@ class RadioUrl:
     target: str
     options: dict[str, str]
 
-    def get_float(self, key: str, default: float) -> float:
+    def get_float(self, key: str, default: float, bounds: Bounds = ANY) -> float:
+        """Option key as a finite number within bounds (default when absent)."""
         value = self.options.get(key)
         if value is None:
             return default
         try:
-            return float(value)
-        except ValueError:
-            raise InvalidRadioUrlError(f"{self.text}: {key}={value} is not a number") from None
+            return parse_float(value, bounds)
+        except OptionError as exc:
+            raise InvalidRadioUrlError(f"{self.text}: {key} {exc}") from None
 
-    def get_int(self, key: str, default: int) -> int:
+    def get_int(self, key: str, default: int, bounds: Bounds = ANY) -> int:
+        """Option key as a whole number within bounds (default when absent)."""
         value = self.options.get(key)
         if value is None:
             return default
         try:
-            return int(value, 0)
-        except ValueError:
-            raise InvalidRadioUrlError(f"{self.text}: {key}={value} is not an integer") from None
+            return parse_int(value, bounds)
+        except OptionError as exc:
+            raise InvalidRadioUrlError(f"{self.text}: {key} {exc}") from None
 
     def get_speed(self) -> float:
         """speed=K: K times real time; speed=max: as fast as possible (math.inf)."""
-        speed = math.inf if self.options.get("speed") == "max" else self.get_float("speed", 1.0)
-        if speed <= 0:
-            raise InvalidRadioUrlError(f"{self.text}: speed must be positive, or max")
-        return speed
+        return self.get_float("speed", 1.0, SPEED)
 
     def check_options(self, allowed: set[str]) -> None:
         unknown = sorted(set(self.options) - allowed)
@@ -180,7 +180,13 @@ def open_radio(url: str) -> Radio:
     """Opens the radio a URL names; raises RadioError with advice if it cannot."""
     parsed = parse_radio_url(url)
     module_name, _, class_name = BACKENDS[parsed.scheme].partition(":")
-    module = importlib.import_module(module_name)
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:  # a dependency of this one backend is missing or broken
+        raise RadioError(
+            f"The {parsed.scheme}:// backend cannot be loaded ({exc}). Reinstall particlebot "
+            "with its dependencies: make venv (or pip install -e .)"
+        ) from exc
     backend: type[Radio] = getattr(module, class_name)
     return backend.from_url(parsed)
 
@@ -216,6 +222,11 @@ class Radio(ABC):
     def now(self) -> float:
         """The clock packets are stamped with (seconds since the epoch; simulated for virtual)."""
         return time.time()
+
+    @property
+    def quiet_hint(self) -> str | None:
+        """What to check when this radio hears nothing at all (None: nothing to suggest)."""
+        return None
 
     @property
     def link_state(self) -> LinkState:

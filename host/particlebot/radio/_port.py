@@ -12,6 +12,15 @@ from particlebot.radio import PortBusyError, PortNotFoundError, PortPermissionEr
 LIST_PORTS_HINT = "list ports with: python -m serial.tools.list_ports -v"
 
 
+def quiet_hint(baud: int) -> str:
+    """What to check when a base-station XBee at this baud hears nothing at all."""
+    return (
+        f"Check that the base XBee's serial rate is {baud} baud (BD=3 is 9600; otherwise add "
+        "?baud=N to the URL), that it has the particles' PAN ID (ID) and channel (CH), and that "
+        "the particles are switched on."
+    )
+
+
 def port_present(port: str) -> bool:
     """Whether the device node exists (a USB adapter that was unplugged has none)."""
     if os.name == "nt":  # COM ports have no path; try opening instead.

@@ -6,7 +6,8 @@ import queue
 from abc import abstractmethod
 from typing import Generic, Protocol, TypeVar
 
-from particlebot.radio import InvalidRadioUrlError, Packet, Radio, RadioUrl
+from particlebot.options import POSITIVE, OptionError, parse_float
+from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
 from particlebot.virtual.light import Lamp
 
 
@@ -28,15 +29,17 @@ def parse_lamp(url: RadioUrl) -> Lamp:
     """lamp=X,Y,H in metres, or the default lamp."""
     if "lamp" not in url.options:
         return Lamp()
+    parts = url.options["lamp"].split(",")
     try:
-        parts = [float(p) for p in url.options["lamp"].split(",")]
-    except ValueError:
-        parts = []
-    if len(parts) != 3 or parts[2] <= 0:
+        if len(parts) != 3:
+            raise OptionError("three numbers")
+        x, y = (parse_float(part) for part in parts[:2])
+        height = parse_float(parts[2], POSITIVE)
+    except OptionError:
         raise InvalidRadioUrlError(
             f"{url.text}: lamp=X,Y,H in metres, H above the photocells, e.g. lamp=0,0,0.28"
-        )
-    return Lamp(parts[0], parts[1], parts[2])
+        ) from None
+    return Lamp(x, y, height)
 
 
 class SimulatedSwarm(Protocol):
@@ -53,6 +56,9 @@ class SimulatedSwarm(Protocol):
 
     def stop(self) -> None: ...
 
+    @property
+    def error(self) -> BaseException | None: ...
+
 
 SwarmT = TypeVar("SwarmT", bound=SimulatedSwarm)
 
@@ -61,6 +67,9 @@ class SwarmRadio(Radio, Generic[SwarmT]):
     """The base station's radio on a simulated swarm's air. The simulation's thread hands packets
     over through a queue; the clock is the simulation's, so the console's ages and timeouts
     follow simulated time when it runs faster or slower than real time."""
+
+    restart_advice = "open it again"
+    """What to do once the simulation has failed (a backend names what to rebuild)."""
 
     def __init__(self, swarm: SwarmT, *, url: str, speed: float | None = None) -> None:
         """speed: step the swarm on its own thread at this pace (else the caller steps it)."""
@@ -82,7 +91,12 @@ class SwarmRadio(Radio, Generic[SwarmT]):
         )
 
     def _check(self) -> None:
-        """Raises RadioError when the simulation can no longer run (nothing to check here)."""
+        """Raises RadioError once the simulation's thread has failed: without it nothing more will
+        ever be heard, and a radio that just stays quiet would look like a silent swarm."""
+        error = self.swarm.error
+        if error is not None:
+            self._set_link(LinkState.LOST, f"the simulation stopped: {error}")
+            raise RadioError(f"The simulated swarm stopped ({error}); {self.restart_advice}")
 
     def now(self) -> float:
         return self.swarm.epoch()

@@ -11,7 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Self
 
-from particlebot.radio import InvalidRadioUrlError, LinkState, RadioError, RadioUrl
+from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds
+from particlebot.radio import RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
 from particlebot.sim.harness import HarnessError
 from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
@@ -34,34 +35,30 @@ MAX_PARTICLES = 32
 
 def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
     url.check_options(OPTIONS)
-    loss = url.get_float("loss", 0.0)
-    if not 0.0 <= loss < 1.0:
-        raise InvalidRadioUrlError(f"{url.text}: loss is a probability below 1, e.g. loss=0.2")
-    delay_ms = url.get_float("delay_ms", 0.0)
-    if delay_ms < 0:
-        raise InvalidRadioUrlError(f"{url.text}: delay_ms cannot be negative")
+    # A loss of 1 would leave nothing to hear: the console could never confirm a command.
+    loss = url.get_float("loss", 0.0, Bounds(minimum=0, below=1))
+    delay_ms = url.get_float("delay_ms", 0.0, NON_NEGATIVE)
     elf = Path(url.options["elf"]) if "elf" in url.options else None
-    base_baud = url.get_int("base_baud", 9600)
-    buffer = url.get_int("buffer", 256)
-    if base_baud <= 0 or buffer < 100:
-        raise InvalidRadioUrlError(f"{url.text}: base_baud > 0 and buffer >= 100 bytes")
     return SwarmConfig(
         count=parse_count(url, default=5, maximum=MAX_PARTICLES),
         lamp=parse_lamp(url),
-        start=url.get_float("start", 0.10),
-        spacing=url.get_float("spacing", 0.155),
+        start=url.get_float("start", 0.10, NON_NEGATIVE),
+        spacing=url.get_float("spacing", 0.155, POSITIVE),
         loss=loss,
         delay_us=delay_ms * 1000,
-        seed=url.get_int("seed", 1),
+        seed=url.get_int("seed", 1, NON_NEGATIVE),
         elf=elf,
-        base_baud=base_baud,
-        buffer_bytes=buffer,
+        base_baud=url.get_int("base_baud", 9600, POSITIVE),
+        # A whole 100-byte RF packet must fit, or the radio could never pass one on.
+        buffer_bytes=url.get_int("buffer", 256, Bounds(minimum=100)),
         keep_history=False,
     )
 
 
 class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
     """The base station's radio on an EmulatedSwarm's air."""
+
+    restart_advice = "rebuild with `make firmware harness` and open it again"
 
     def __init__(
         self,
@@ -91,15 +88,6 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
                 "Run: make firmware harness (after `make system-deps` for the AVR tools)"
             ) from exc
         return cls(swarm, url=url.text, speed=speed, owns_swarm=True)
-
-    def _check(self) -> None:
-        error = self.swarm.error
-        if error is not None:
-            self._set_link(LinkState.LOST, f"the emulation stopped: {error}")
-            raise RadioError(
-                f"The emulated swarm stopped ({error}); rebuild with `make firmware harness` "
-                "and open it again"
-            )
 
     def close(self) -> None:
         if self._owns_swarm:

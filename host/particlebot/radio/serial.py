@@ -9,6 +9,7 @@ from typing import Self
 
 import serial
 
+from particlebot.options import POSITIVE
 from particlebot.radio import (
     InvalidRadioUrlError,
     LinkState,
@@ -17,7 +18,7 @@ from particlebot.radio import (
     Radio,
     RadioUrl,
 )
-from particlebot.radio._port import open_serial, port_present
+from particlebot.radio._port import open_serial, port_present, quiet_hint
 
 # API frame types an XBee 802.15.4 radio emits towards its host; used only to warn that a radio
 # is in API mode while being read as transparent.
@@ -64,10 +65,14 @@ class SerialRadio(Radio):
             )
         return cls(
             url.target,
-            url.get_int("baud", 9600),
+            url.get_int("baud", 9600, POSITIVE),
             url=url.text,
-            retry_s=url.get_float("retry", 0.5),
+            retry_s=url.get_float("retry", 0.5, POSITIVE),
         )
+
+    @property
+    def quiet_hint(self) -> str | None:
+        return quiet_hint(self.baud)
 
     def send(self, data: bytes) -> None:
         with self._lock:

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from typing import Self
 
+from particlebot.options import NON_NEGATIVE, POSITIVE, SWITCH
 from particlebot.radio import RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
+from particlebot.virtual import MAX_PARTICLES
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 OPTIONS = {"lamp", "speed", "spacing", "start", "seed", "kinematics", "noise"}
@@ -15,13 +17,13 @@ def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
     """virtual://N?lamp=X,Y,H&spacing=M&start=M&seed=S&kinematics=0|1&noise=SIGMA (metres)."""
     url.check_options(OPTIONS)
     return SwarmConfig(
-        count=parse_count(url, default=10, maximum=200),
+        count=parse_count(url, default=10, maximum=MAX_PARTICLES),
         lamp=parse_lamp(url),
-        start=url.get_float("start", 0.10),
-        spacing=url.get_float("spacing", 0.155),
-        kinematics=url.get_int("kinematics", 1) != 0,
-        seed=url.get_int("seed", 1),
-        noise=url.get_float("noise", 0.0),
+        start=url.get_float("start", 0.10, NON_NEGATIVE),
+        spacing=url.get_float("spacing", 0.155, POSITIVE),
+        kinematics=url.get_int("kinematics", 1, SWITCH) != 0,
+        seed=url.get_int("seed", 1, NON_NEGATIVE),
+        noise=url.get_float("noise", 0.0, NON_NEGATIVE),
     )
 
 

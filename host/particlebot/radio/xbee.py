@@ -17,6 +17,7 @@ from digi.xbee.models.mode import OperatingMode
 from digi.xbee.packets.raw import RX16Packet, RX64Packet
 from digi.xbee.serial import XBeeSerialPort
 
+from particlebot.options import NON_NEGATIVE, POSITIVE
 from particlebot.radio import (
     InvalidRadioUrlError,
     LinkState,
@@ -28,7 +29,7 @@ from particlebot.radio import (
     RadioUrl,
     WrongModeError,
 )
-from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present
+from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present, quiet_hint
 
 _log = logging.getLogger(__name__)
 
@@ -203,13 +204,17 @@ class XBeeRadio(Radio):
             raise InvalidRadioUrlError(f"{url.text}: no port given; e.g. xbee:///dev/ttyUSB0")
         return cls(
             url.target,
-            url.get_int("baud", 9600),
+            url.get_int("baud", 9600, POSITIVE),
             url=url.text,
-            sync_timeout=url.get_float("timeout", 2.0),
-            probe_timeout=url.get_float("probe", 0.6),
-            guard_s=url.get_float("guard", 1.1),
-            retry_s=url.get_float("retry", 1.0),
+            sync_timeout=url.get_float("timeout", 2.0, POSITIVE),
+            probe_timeout=url.get_float("probe", 0.6, POSITIVE),
+            guard_s=url.get_float("guard", 1.1, NON_NEGATIVE),
+            retry_s=url.get_float("retry", 1.0, POSITIVE),
         )
+
+    @property
+    def quiet_hint(self) -> str | None:
+        return quiet_hint(self.baud)
 
     def _open_device(self) -> _Raw802WithoutLookups:
         self.api_mode = probe_mode(

@@ -20,8 +20,6 @@ from typing import IO, Self
 CPU_HZ = 8_000_000
 """Clock of the emulated ATmega32U4; every cycle stamp counts these from power-on."""
 SENSOR_COUNT = 6
-ADC_INPUTS = 8
-"""ADC0..ADC7: the inputs simavr 1.6 models (the photocells are 7, 6, 5, 4, 1, 0)."""
 EEPROM_SIZE = 1024
 FAULT_PIN = ("D", 1)
 """Arduino D2 (PD1): the fault-injection build hangs (and the watchdog bites) while it is low."""
@@ -93,8 +91,7 @@ class HarnessError(RuntimeError):
 class ParticleSim:
     """A particle_sim process running one firmware image; collects what the firmware does.
 
-    uart, servo_pulses and resets grow as simulated time passes; take_uart() returns the bytes
-    sent since its previous call.
+    uart, servo_pulses and resets grow as simulated time passes; forget() drops what was kept.
     """
 
     def __init__(
@@ -136,7 +133,6 @@ class ParticleSim:
         self.resets: list[Reset] = []
         self.crashed_cycle: int | None = None
         self._rise: int | None = None
-        self._uart_taken = 0
         self._running = False
         hello = self._readline().split()
         if hello != ["hello", "particle_sim", "1", str(CPU_HZ)]:
@@ -204,11 +200,6 @@ class ParticleSim:
         for k, value in enumerate(mv):
             self._send(f"light {k} {self._millivolts(value)}")
 
-    def set_adc_mv(self, channel: int, mv: int) -> None:
-        if not 0 <= channel < ADC_INPUTS:
-            raise ValueError(f"ADC channel {channel} out of range")
-        self._send(f"adc {channel} {self._millivolts(mv)}")
-
     def set_noise_mv(self, mv: int) -> None:
         """What the temperature sensor reads; only the next boot's random seed depends on it."""
         self._send(f"temp {self._millivolts(mv)}")
@@ -225,18 +216,11 @@ class ParticleSim:
 
     # ---- outputs -----------------------------------------------------------------------------
 
-    def take_uart(self) -> bytes:
-        """The Serial1 bytes sent since the previous call."""
-        data = bytes(b.value for b in self.uart[self._uart_taken :])
-        self._uart_taken = len(self.uart)
-        return data
-
     def forget(self) -> None:
         """Drops the UART bytes and servo pulses recorded so far, so that a long run (the console
-        driving a swarm for hours) keeps its memory bounded; take_uart() starts afresh."""
+        driving a swarm for hours) keeps its memory bounded."""
         self.uart.clear()
         self.servo_pulses.clear()
-        self._uart_taken = 0
 
     def eeprom(self) -> bytes:
         """The emulated chip's 1024 EEPROM bytes now."""

@@ -81,12 +81,6 @@ class VirtualAir:
             at, _, receiver, source, data = heapq.heappop(self._arrivals)
             self._nodes[receiver].deliver(data, source, at)
 
-    def next_event(self) -> float | None:
-        times = [node.airs_at for node in self._nodes if node.airs_at is not None]
-        if self._arrivals:
-            times.append(self._arrivals[0][0])
-        return min(times) if times else None
-
     def _air(self, node: _Node, data: bytes, at: float) -> None:
         self.packets_aired += 1
         self.bytes_aired += len(data)

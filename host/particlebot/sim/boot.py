@@ -99,9 +99,11 @@ def _ping(sim: ParticleSim, timeout_s: float) -> BootReport:
     sim.run_for(_BOOT_US)
     sim.send_uart(encode_frame(Ping(target=BROADCAST_ID), BASE_STATION_ID, 1))
     decoder = StreamDecoder()
+    read = 0
     while sim.time_s < timeout_s:
         sim.run_for(_STEP_US)
-        for frame in decoder.feed(sim.take_uart()):
+        fresh, read = sim.uart[read:], len(sim.uart)
+        for frame in decoder.feed(bytes(byte.value for byte in fresh)):
             message = frame.message
             if isinstance(message, Status):
                 return BootReport(frame.sender, message, sim.time_s)

@@ -69,6 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--no-ui", action="store_true", help="print a summary, no live console")
     demo.add_argument("--no-log", action="store_true", help="do not write a session log")
     _log_options(demo)
+
+    # Parsed by particlebot.commands.study itself (main() hands it over): per-study options.
+    commands.add_parser("study", help="run one of the paper's simulation studies on Dask")
     return parser
 
 
@@ -90,6 +93,11 @@ def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["study"]:
+        from particlebot.commands.study import main as study
+
+        return study(argv[1:])
     args = build_parser().parse_args(argv)
     return _dispatch(args.command)(args)
 

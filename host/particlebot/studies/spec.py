@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -147,8 +147,15 @@ class RunSpec:
 
     @property
     def fingerprint(self) -> str:
-        """Hash of everything that determines the result: the setup and the measure."""
-        return fingerprint({"setup": asdict(self.setup), "measure": describe(self.measure)})
+        """Hash of everything that determines the result: the setup and the measure. Fields at
+        their defaults are left out, so that a field added later (with a default that keeps the
+        old behaviour) leaves every stored run id as it was."""
+        setup = {
+            f.name: value
+            for f in fields(self.setup)
+            if (value := getattr(self.setup, f.name)) != f.default
+        }
+        return fingerprint({"setup": _plain(setup), "measure": describe(self.measure)})
 
     @property
     def run_id(self) -> str:
@@ -181,6 +188,17 @@ def _id_value(value: CellValue) -> str:
     if isinstance(value, float):
         return f"{value:g}"
     return str(value)
+
+
+def _plain(value: Any) -> Any:
+    """Dataclasses and tuples inside a setup as JSON-ready dicts and lists."""
+    if is_dataclass(value) and not isinstance(value, type):
+        return asdict(value)
+    if isinstance(value, dict):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, tuple | list):
+        return [_plain(item) for item in value]
+    return value
 
 
 def describe(measure: Measure) -> dict[str, Any]:

@@ -24,11 +24,12 @@ class StandInRunner:
 
     For the engine's tests it can also misbehave on purpose: crash_once names runs whose first
     attempt kills the worker process (os._exit) and leaves a marker in marker_dir, so the retry
-    finds it and runs normally; delay_s makes every run take that long; warm_dir receives one file
-    per process that warmed up.
+    finds it and runs normally; raise_for names runs that raise every time; delay_s makes every
+    run take that long; warm_dir receives one file per process that warmed up.
     """
 
     crash_once: frozenset[str] = field(default_factory=frozenset)
+    raise_for: frozenset[str] = field(default_factory=frozenset)
     marker_dir: Path | None = None
     delay_s: float = 0.0
     warm_dir: Path | None = None
@@ -50,6 +51,8 @@ class StandInRunner:
             if not marker.exists():
                 marker.write_text(str(os.getpid()))
                 os._exit(70)  # a worker dying mid-run, as an out-of-memory kill would
+        if spec.run_id in self.raise_for:
+            raise RuntimeError(f"the stand-in fails {spec.run_id} on purpose")
         if self.delay_s > 0:
             time.sleep(self.delay_s)
         return _pretend(spec)

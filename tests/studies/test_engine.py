@@ -12,10 +12,11 @@ import time
 from pathlib import Path
 
 import pytest
+from distributed import LocalCluster
 
 from particlebot.commands.study import main
 from particlebot.studies.definitions import STUDIES, RawOptions, resolve
-from particlebot.studies.engine import run_study
+from particlebot.studies.engine import ClusterError, run_study
 from particlebot.studies.spec import RunSpec
 from particlebot.studies.standin import StandInRunner
 from particlebot.studies.store import ResultStore
@@ -126,3 +127,22 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
     after = finished(results)
     assert set(after) == {s.run_id for s in specs}
     assert all(after[run_id] == mtime for run_id, mtime in before.items())
+
+
+def test_an_existing_cluster_gets_the_same_runs_and_stays_up(tmp_path: Path) -> None:
+    specs = quick_specs(seeds=1)
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        store = ResultStore(tmp_path / "results")
+        outcome = run_study(specs, store, StandInRunner(), scheduler=address, stream=io.StringIO())
+        assert (outcome.ran, outcome.failed) == (len(specs), {})
+        assert set(finished(store.root)) == {s.run_id for s in specs}
+        with pytest.raises(ClusterError, match=r"could not prepare.*no simulator here"):
+            run_study(
+                quick_specs(seeds=2),
+                store,
+                StandInRunner(warm_up_fails=True),
+                scheduler=address,
+                stream=io.StringIO(),
+            )
+        assert cluster.status.name == "running"

@@ -144,7 +144,9 @@ def _study(
     if args.list:
         return _list(study, options, specs, store, runner.name)
     if args.report_only:
-        return _report(study, options, specs, store, runner.name, failed={})
+        planned = {spec.run_id for spec in specs}
+        failed = {k: v for k, v in store.load_failures().items() if k in planned}
+        return _report(study, options, specs, store, runner.name, failed)
     from particlebot.studies.engine import ClusterError, run_study
     from particlebot.studies.seam import SimulatorUnavailableError
 

@@ -148,24 +148,38 @@ class Study:
 # ---- the worlds of each study ---------------------------------------------------------------
 
 
-def _speed_world(
-    study: Study, n: int, value: float, seed: int, options: StudyOptions
+def _open_floor(
+    n: int, seed: int, options: StudyOptions, dead: int = 0, noise: float = 0.0
 ) -> tuple[WorldSetup, Measure]:
-    """A swarm alone on the floor, the lamp far ahead; value is the dead fraction (dead study),
-    the distance-estimation noise (noise study) or unused (speed study)."""
-    dpd = densest_packing_diameter_m(n)
-    dead = round(value * n) if study.name == "dead" else 0
-    noise = value if study.name == "noise" else 0.0
+    """A swarm alone on the floor with the lamp far ahead, measured by its speed."""
     setup = WorldSetup(
         particles=n,
         seed=seed,
         duration_s=options.duration_s,
-        lamp_x=dpd / 2 + FAR_LAMP_M,
+        lamp_x=densest_packing_diameter_m(n) / 2 + FAR_LAMP_M,
         placement=options.placement,
         dead=dead,
         noise_diameters=noise,
     )
     return setup, SpeedTowardLight(skip_s=options.skip_s)
+
+
+def _dead_world(
+    study: Study, n: int, fraction: float, seed: int, options: StudyOptions
+) -> tuple[WorldSetup, Measure]:
+    return _open_floor(n, seed, options, dead=round(fraction * n))
+
+
+def _noise_world(
+    study: Study, n: int, noise: float, seed: int, options: StudyOptions
+) -> tuple[WorldSetup, Measure]:
+    return _open_floor(n, seed, options, noise=noise)
+
+
+def _speed_world(
+    study: Study, n: int, unused: float, seed: int, options: StudyOptions
+) -> tuple[WorldSetup, Measure]:
+    return _open_floor(n, seed, options)
 
 
 def gap_geometry(n: int, gap_fraction: float) -> tuple[float, tuple[Rect, Rect], float]:
@@ -279,7 +293,7 @@ STUDIES: dict[str, Study] = {
                 paper.DEAD_SIZES, paper.DEAD_FRACTIONS, 11, _TWO_HOURS, _HALF_HOUR
             ),
             quick=Preset((10, 100), (0.0, 0.2, 0.4), 3, _HALF_HOUR, 600.0),
-            world=_speed_world,
+            world=_dead_world,
             tables=(
                 PublishedTable("Table S3", "mm/s", _flatten(paper.TABLE_S3_MM_S)),
                 PublishedTable(
@@ -343,7 +357,7 @@ STUDIES: dict[str, Study] = {
                 _TWO_HOURS, _HALF_HOUR,
             ),
             quick=Preset((100,), (0.0, 1.0, 2.0), 3, _HALF_HOUR, 600.0),
-            world=_speed_world,
+            world=_noise_world,
             tables=(
                 PublishedTable(
                     "Fig. S20 (noise-free value from Table S3)", "mm/s",

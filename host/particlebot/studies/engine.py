@@ -14,6 +14,7 @@ from typing import TextIO
 
 import dask
 from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
 from particlebot.studies.progress import Progress
@@ -77,7 +78,7 @@ def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[C
     if scheduler is not None:
         try:
             client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError) as exc:
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
         try:
             yield client
@@ -134,7 +135,14 @@ def run_pending(
 ) -> None:
     """Submits todo and writes each result the moment it arrives. Ctrl-C cancels what is left
     and returns with outcome.interrupted set; everything written stays."""
-    client.register_plugin(StudyWorkerSetup(runner, ignore_interrupts=is_local(client)))
+    try:
+        client.register_plugin(StudyWorkerSetup(runner, ignore_interrupts=is_local(client)))
+    except Exception as exc:  # raised in a worker: its type is whatever the runner raised
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise ClusterError(
+            f"the workers could not prepare for the runs ({type(exc).__name__}: {first}); "
+            "is particlebot installed there, at the same commit?"
+        ) from None
     by_key: dict[str, RunSpec] = {}
     futures: list[Future] = []
     for spec in todo:
@@ -146,15 +154,15 @@ def run_pending(
     try:
         for future in as_completed(futures):
             spec = by_key[str(future.key)]
-            error = _error_of(future)
-            if error is None:
-                store.write(future.result())
+            record, error = _result_of(future)
+            if record is not None:
+                store.write(record)
                 outcome.ran += 1
             else:
                 store.write_failure(spec, error)
                 outcome.failed[spec.run_id] = error
             future.release()
-            progress.advance(spec.cost, failed=error is not None)
+            progress.advance(spec.cost, failed=record is None)
     except KeyboardInterrupt:
         outcome.interrupted = True
         client.cancel(futures)
@@ -162,19 +170,22 @@ def run_pending(
         progress.close()
 
 
-def _error_of(future: Future) -> str | None:
-    if future.status == "finished":
-        return None
-    if future.status == "cancelled":
-        return "cancelled by the cluster"
-    exc = future.exception()
-    if isinstance(exc, KilledWorker):
-        return (
+def _result_of(future: Future) -> tuple[RunRecord | None, str]:
+    """The record, or why there is none in one line. Asks the future itself rather than its
+    status: a result lost with a dying worker sends a finished future back to pending (Dask
+    recomputes it), and result() waits for the final word."""
+    try:
+        return future.result(), ""
+    except KilledWorker:
+        return None, (
             f"the worker process running it died {WORKER_DEATHS_ALLOWED} times "
             "(out of memory, or a crash in compiled code)"
         )
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+    except FutureCancelledError:
+        return None, "cancelled by the cluster"
+    except Exception as exc:  # raised by the run on the worker: any type
+        text = str(exc).strip().splitlines()
+        return None, f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
 def run_study(

@@ -25,7 +25,8 @@ class StandInRunner:
     For the engine's tests it can also misbehave on purpose: crash_once names runs whose first
     attempt kills the worker process (os._exit) and leaves a marker in marker_dir, so the retry
     finds it and runs normally; raise_for names runs that raise every time; delay_s makes every
-    run take that long; warm_dir receives one file per process that warmed up.
+    run take that long; warm_dir receives one file per process that warmed up, and warm_up_fails
+    makes warming up raise (a worker without the simulator, say).
     """
 
     crash_once: frozenset[str] = field(default_factory=frozenset)
@@ -33,6 +34,7 @@ class StandInRunner:
     marker_dir: Path | None = None
     delay_s: float = 0.0
     warm_dir: Path | None = None
+    warm_up_fails: bool = False
 
     @property
     def name(self) -> str:
@@ -42,6 +44,8 @@ class StandInRunner:
         return None
 
     def warm_up(self) -> None:
+        if self.warm_up_fails:
+            raise ImportError("no simulator here (the stand-in pretends)")
         if self.warm_dir is not None:
             (self.warm_dir / str(os.getpid())).touch()
 

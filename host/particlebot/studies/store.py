@@ -55,6 +55,17 @@ class ResultStore:
             records[record.run_id] = record
         return records, report
 
+    def load_failures(self) -> dict[str, str]:
+        """run id -> error of the runs that failed last time and have not finished since."""
+        failures = {}
+        for path in sorted(self.failed.glob("*.json")) if self.failed.is_dir() else []:
+            try:
+                data = json.loads(path.read_text())
+                failures[str(data["run_id"])] = str(data["error"])
+            except (OSError, ValueError, KeyError, TypeError):
+                continue
+        return failures
+
     def write(self, record: RunRecord) -> Path:
         path = self.runs / f"{record.run_id}.json"
         write_json_atomically(path, record.to_json())

@@ -152,6 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
     flash.add_arguments(commands.add_parser("flash", help="firmware and an id onto Fio v3 boards"))
     radio.add_arguments(commands.add_parser("radio", help="configure XBee radios for the fleet"))
     fleet_command.add_arguments(commands.add_parser("fleet", help="create or list the fleet file"))
+
+    # Parsed by particlebot.commands.study itself (main() hands it over): per-study options.
+    commands.add_parser("study", help="run one of the paper's simulation studies on Dask")
     return parser
 
 
@@ -175,6 +178,11 @@ def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["study"]:
+        from particlebot.commands.study import main as study
+
+        return study(argv[1:])
     args = build_parser().parse_args(argv)
     return _dispatch(args.command)(args)
 

@@ -1,0 +1,217 @@
+"""Runs a study's missing runs on Dask (a local cluster or an existing one), keeping each result."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import signal
+import threading
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import TextIO
+
+import dask
+from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+from distributed.client import FutureCancelledError
+from distributed.scheduler import KilledWorker
+
+from particlebot.studies.progress import Progress
+from particlebot.studies.runners import Runner, execute
+from particlebot.studies.spec import RunRecord, RunSpec
+from particlebot.studies.store import ResultStore
+
+WORKER_DEATHS_ALLOWED = 3
+"""A run whose worker process dies (killed for memory, a crash, a node lost) goes back to the
+scheduler and runs on another worker, this many times: Dask's allowed-failures, set on the local
+cluster's scheduler (an existing cluster keeps its own setting, 3 unless changed)."""
+EXCEPTION_RETRIES = 1
+"""A run that raises is tried once more (Dask's retries=): a full disk or a file system hiccup on
+a cluster passes; a deterministic error fails twice and is recorded."""
+LOG = logging.getLogger(__name__)
+
+
+class ClusterError(RuntimeError):
+    """The Dask cluster cannot be reached or lost; the message is one line."""
+
+
+@dataclass
+class StudyOutcome:
+    total: int
+    reused: int
+    """Runs found finished in the results folder."""
+    ran: int = 0
+    failed: dict[str, str] = field(default_factory=dict)
+    """run id -> the error, one line."""
+    interrupted: bool = False
+
+    @property
+    def finished(self) -> int:
+        return self.reused + self.ran
+
+
+class StudyWorkerSetup(WorkerPlugin):
+    """Prepares every worker, including ones that join or restart later: warms the runner up
+    (numba compiles once per process, or loads its on-disk cache) off the worker's event loop;
+    on a local cluster, also leaves Ctrl-C to the client, which shuts the cluster down in order
+    (a terminal sends SIGINT to the whole process group, and a worker that raised
+    KeyboardInterrupt would print a traceback over the progress line)."""
+
+    name = "particlebot-study"
+
+    def __init__(self, runner: Runner, ignore_interrupts: bool) -> None:
+        self.runner = runner
+        self.ignore_interrupts = ignore_interrupts
+
+    async def setup(self, worker: object) -> None:
+        if self.ignore_interrupts and threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        await asyncio.get_running_loop().run_in_executor(None, self.runner.warm_up)
+
+
+@contextmanager
+def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[Client]:
+    """A client of the cluster at scheduler (tcp://HOST:8786), or of a new local cluster of
+    `workers` processes (default: one per core), one thread each: a run is single-threaded, so a
+    process per core keeps every core busy without oversubscribing numba's threads."""
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    cluster = _local_cluster(workers or os.cpu_count() or 1)
+    try:
+        client = Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()
+
+
+def _local_cluster(workers: int) -> LocalCluster:
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    # Worker processes inherit an ignored SIGINT (the plugin covers restarted ones).
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if in_main_thread else None
+    try:
+        with dask.config.set({"distributed.scheduler.allowed-failures": WORKER_DEATHS_ALLOWED}):
+            return LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+                env={"NUMBA_NUM_THREADS": "1"},
+            )
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+def is_local(client: Client) -> bool:
+    return isinstance(client.cluster, LocalCluster)
+
+
+def pending(specs: Sequence[RunSpec], finished: dict[str, RunRecord]) -> list[RunSpec]:
+    """The runs still to do, dearest first (they set how long the study takes)."""
+    todo = {spec.run_id: spec for spec in specs if spec.run_id not in finished}
+    return sorted(todo.values(), key=lambda spec: spec.cost, reverse=True)
+
+
+def run_pending(
+    client: Client,
+    runner: Runner,
+    todo: Sequence[RunSpec],
+    store: ResultStore,
+    progress: Progress,
+    outcome: StudyOutcome,
+) -> None:
+    """Submits todo and writes each result the moment it arrives. Ctrl-C cancels what is left
+    and returns with outcome.interrupted set; everything written stays."""
+    try:
+        client.register_plugin(StudyWorkerSetup(runner, ignore_interrupts=is_local(client)))
+    except Exception as exc:  # raised in a worker: its type is whatever the runner raised
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise ClusterError(
+            f"the workers could not prepare for the runs ({type(exc).__name__}: {first}); "
+            "is particlebot installed there, at the same commit?"
+        ) from None
+    by_key: dict[str, RunSpec] = {}
+    futures: list[Future] = []
+    for spec in todo:
+        # The key is the run itself: two clients asking for the same run share one task.
+        key = f"{runner.name}-{spec.run_id}"
+        by_key[key] = spec
+        futures.append(client.submit(execute, runner, spec, key=key, retries=EXCEPTION_RETRIES))
+    progress.start()
+    try:
+        for future in as_completed(futures):
+            spec = by_key[str(future.key)]
+            record, error = _result_of(future)
+            if record is not None:
+                store.write(record)
+                outcome.ran += 1
+            else:
+                store.write_failure(spec, error)
+                outcome.failed[spec.run_id] = error
+            future.release()
+            progress.advance(spec.cost, failed=record is None)
+    except KeyboardInterrupt:
+        outcome.interrupted = True
+        client.cancel(futures)
+    finally:
+        progress.close()
+
+
+def _result_of(future: Future) -> tuple[RunRecord | None, str]:
+    """The record, or why there is none in one line. Asks the future itself rather than its
+    status: a result lost with a dying worker sends a finished future back to pending (Dask
+    recomputes it), and result() waits for the final word."""
+    try:
+        return future.result(), ""
+    except KilledWorker:
+        return None, (
+            f"the worker process running it died {WORKER_DEATHS_ALLOWED} times "
+            "(out of memory, or a crash in compiled code)"
+        )
+    except FutureCancelledError:
+        return None, "cancelled by the cluster"
+    except Exception as exc:  # raised by the run on the worker: any type
+        text = str(exc).strip().splitlines()
+        return None, f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+def run_study(
+    specs: Sequence[RunSpec],
+    store: ResultStore,
+    runner: Runner,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    label: str = "study",
+    stream: TextIO | None = None,
+) -> StudyOutcome:
+    """Runs what the results folder lacks, on the cluster at scheduler or a local one."""
+    store.prepare()
+    finished, _ = store.load_finished(runner.name)
+    todo = pending(specs, finished)
+    outcome = StudyOutcome(total=len({spec.run_id for spec in specs}), reused=0)
+    outcome.reused = outcome.total - len(todo)
+    if not todo:
+        return outcome
+    if scheduler is None:
+        # Compile once here, so the local workers load numba's cache instead of all compiling.
+        runner.warm_up()
+    progress = Progress(
+        label, outcome.total, outcome.reused, sum(spec.cost for spec in todo), stream=stream
+    )
+    with dask_client(scheduler, workers) as client:
+        run_pending(client, runner, todo, store, progress, outcome)
+    return outcome

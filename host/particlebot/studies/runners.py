@@ -1,0 +1,84 @@
+"""Who executes a run on a worker: the simulator through the seam, or a stand-in in tests."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Protocol
+
+from particlebot.studies import seam
+from particlebot.studies.spec import RunRecord, RunSpec, SimOutcome, describe
+
+
+class Runner(Protocol):
+    """Turns a spec into an outcome on a worker. Must pickle small: Dask sends it with each run."""
+
+    @property
+    def name(self) -> str:
+        """Recorded in each result: a resumed study only counts results its own runner made."""
+
+    def check(self) -> None:
+        """Raises (with a one-line reason) if this runner cannot work here; called before a
+        study starts, so that nothing is submitted in vain."""
+
+    def warm_up(self) -> None:
+        """Called once in every worker process before its first run (and the client's, for a
+        local cluster): compile what needs compiling."""
+
+    def __call__(self, spec: RunSpec) -> SimOutcome: ...
+
+
+@dataclass(frozen=True)
+class SimulatorRunner:
+    """The real thing: every run through seam.run_one."""
+
+    run_folders: Path | None = None
+    """Keep each run's CSV and snapshots in run_folders/RUN_ID (a path every worker can write)."""
+
+    @property
+    def name(self) -> str:
+        return "simulator"
+
+    def check(self) -> None:
+        seam.check_simulator()
+
+    def warm_up(self) -> None:
+        seam.warm_up()
+
+    def __call__(self, spec: RunSpec) -> SimOutcome:
+        folder = None if self.run_folders is None else self.run_folders / spec.run_id
+        return seam.run_one(spec, folder)
+
+
+def execute(runner: Runner, spec: RunSpec) -> RunRecord:
+    """The task a worker runs: simulate, measure there (only numbers and the short centroid track
+    travel back, never particle arrays), and stamp who did it."""
+    start = time.perf_counter()
+    outcome = runner(spec)
+    metrics = spec.measure.evaluate(spec.setup, outcome)
+    return RunRecord(
+        run_id=spec.run_id,
+        study=spec.study,
+        cell=spec.cell_dict,
+        seed=spec.seed,
+        runner=runner.name,
+        metrics=metrics,
+        summary=dict(outcome.summary),
+        track=outcome.track.to_json(),
+        setup=asdict(spec.setup),
+        measure=describe(spec.measure),
+        wall_s=time.perf_counter() - start,
+        worker=_worker_address(),
+        pid=os.getpid(),
+    )
+
+
+def _worker_address() -> str:
+    try:
+        from distributed import get_worker
+
+        return str(get_worker().address)
+    except (ImportError, ValueError):
+        return "local"

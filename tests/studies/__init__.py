@@ -1,0 +1,1 @@
+"""Tests of the simulation studies: definitions, measures, reports and the Dask engine."""

@@ -10,7 +10,7 @@
 #include <stdint.h>
 
 // The generated header must come from the generator version this codec was written against.
-#define PB_PROTOCOL_EXPECTED_GENERATOR_VERSION 1
+#define PB_PROTOCOL_EXPECTED_GENERATOR_VERSION 2
 #include "protocol_gen.h"
 #if PB_PROTOCOL_GENERATOR_VERSION != PB_PROTOCOL_EXPECTED_GENERATOR_VERSION
 #error "Regenerate protocol_gen.h with tools/gen_protocol.py (make generate)"

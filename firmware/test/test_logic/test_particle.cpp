@@ -135,7 +135,7 @@ TEST_CASE("SET_PARAM is refused while running and applied at rest, GET_PARAM rea
   pb::ParamValueMessage reply;
   REQUIRE(reply.decode(frames[0].payload, frames[0].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::BUSY));
-  CHECK(reply.value == 150);
+  CHECK(static_cast<int32_t>(reply.value) == 150);  // a copy: the field is packed
   b.send(pb::StopMessage());
   b.advance(700);
   b.drain(frames, 4);
@@ -151,7 +151,7 @@ TEST_CASE("SET_PARAM is refused while running and applied at rest, GET_PARAM rea
   REQUIRE(reply.decode(frames[0].payload, frames[0].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::OK));
   REQUIRE(reply.decode(frames[1].payload, frames[1].length));
-  CHECK(reply.value == 75);
+  CHECK(static_cast<int32_t>(reply.value) == 75);
   REQUIRE(reply.decode(frames[2].payload, frames[2].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::UNKNOWN_PARAM));
 }
@@ -348,7 +348,7 @@ TEST_CASE("broadcast SET_PARAM, GET_PARAM and IDENTIFY are answered in a reply s
     pb::ParamValueMessage reply;
     REQUIRE(reply.decode(frames[0].payload, frames[0].length));
     CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::OK));
-    CHECK(reply.value == 75);
+    CHECK(static_cast<int32_t>(reply.value) == 75);
 
     pb::GetParamMessage get;
     get.target = pb::kBroadcastId;

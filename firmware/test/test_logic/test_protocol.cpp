@@ -353,7 +353,9 @@ void check_fields(const pb::Frame &frame, const Entry &vector, const Bytes &byte
     c.scalar("group_size", m.group_size);
     c.scalar("sensor_faults", m.sensor_faults);
     c.scalar("intensity", m.intensity);
-    c.array("sensors", m.sensors, 6);
+    uint16_t sensors[6];  // an aligned copy: the struct is packed
+    memcpy(sensors, m.sensors, sizeof sensors);
+    c.array("sensors", sensors, 6);
     c.scalar("cycle_phase", m.cycle_phase);
     c.scalar("radius_um", m.radius_um);
     c.scalar("uptime_ms", m.uptime_ms);

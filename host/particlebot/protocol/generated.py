@@ -8,7 +8,7 @@ import struct
 from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple, Self, TypeAlias
 
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 DEFINITION_HASH = 0xDCF5A94F
 """CRC-32 of the definition's layout; every STATUS frame carries the firmware's."""
 SYNC = bytes((0xA5, 0x5A))

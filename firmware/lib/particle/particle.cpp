@@ -4,38 +4,9 @@
 namespace pb {
 
 Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
-    : settings_(storage),
-      rng_(rng_seed),
-      coordinator_(rng_),
-      now_ms_(0),
-      boot_ms_(0),
-      last_rx_ms_(0),
-      next_status_ms_(0),
-      ping_reply_ms_(0),
-      param_reply_ms_(0),
-      param_reply_value_(0),
-      radius_um_(0),
-      pulse_us_(0),
-      servo_start_ms_(0),
-      servo_step_(0),
-      servo_kind_(0xFF),
-      round_intensity_(0),
-      record_round_(0),
-      tx_dropped_(0),
-      tx_head_(0),
-      tx_count_(0),
-      tx_frame_left_(0),
-      record_run_(0),
-      seq_(0),
-      reset_cause_(reset_cause),
-      rx_idle_pending_(false),
-      ping_reply_pending_(false),
-      param_reply_pending_(false),
-      param_reply_param_(0),
-      param_reply_result_(0),
-      readings_awaited_(0) {
-  geometry_.r_min_um = 0;
-  geometry_.r_max_um = 0;
+    : ParticleState(), settings_(storage), rng_(rng_seed), coordinator_(rng_) {
+  servo_kind_ = 0xFF;  // no motion evaluated yet
+  reset_cause_ = reset_cause;
 }
 
 void Particle::begin(uint32_t now_ms) {

@@ -15,10 +15,45 @@
 
 namespace pb {
 
+// The Particle's plain bookkeeping, a base so that the constructor zeroes it as one block (member
+// by member, the AVR spent about 200 B of flash on it).
+struct ParticleState {
+  Geometry geometry_;
+  uint32_t now_ms_;
+  uint32_t boot_ms_;
+  uint32_t last_rx_ms_;
+  uint32_t next_status_ms_;
+  uint32_t ping_reply_ms_;   // when the pending STATUS answering a broadcast request is due
+  uint32_t param_reply_ms_;  // when the pending PARAM_VALUE is due
+  int32_t param_reply_value_;
+  uint32_t radius_um_;
+  uint16_t pulse_us_;
+  uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
+  uint16_t servo_step_;
+  uint8_t servo_kind_;
+  uint16_t round_intensity_;  // the reading this round uses and broadcasts
+  uint16_t record_round_;     // which round of record_run_ record_ holds
+  uint16_t tx_dropped_;
+  uint8_t tx_head_;
+  uint8_t tx_count_;
+  uint8_t tx_frame_left_;  // bytes of the head frame not taken yet; 0 between frames
+  uint8_t record_run_;
+  uint8_t seq_;
+  uint8_t reset_cause_;
+  bool rx_idle_pending_;      // bytes arrived since the last parser timeout
+  bool ping_reply_pending_;   // a broadcast PING or IDENTIFY awaits its STATUS
+  bool param_reply_pending_;  // a broadcast SET_PARAM or GET_PARAM awaits its PARAM_VALUE
+  uint8_t param_reply_param_;
+  uint8_t param_reply_result_;
+  // Readings still to complete before the round's own: 2 when a round starts mid-reading (that
+  // reading mixes in light from before the round), 1 otherwise, 0 once round_intensity_ is set.
+  uint8_t readings_awaited_;
+};
+
 // Driven identically by firmware/src/main.cpp (hardware) and the C API (PC). It never reads a
 // clock or a pin: the owner passes time, ADC conversions and received bytes in, and takes the
 // servo pulse and the bytes to transmit out. No call blocks or allocates.
-class Particle {
+class Particle : private ParticleState {
  public:
   // Bytes of radio output that can wait for Serial1; a frame that does not fit is dropped whole.
   static const uint8_t kTxCapacity = 128;
@@ -110,37 +145,7 @@ class Particle {
   Rng rng_;
   Coordinator coordinator_;
   IntensityRecord record_;
-  Geometry geometry_;
   uint8_t tx_[kTxCapacity];
-  uint32_t now_ms_;
-  uint32_t boot_ms_;
-  uint32_t last_rx_ms_;
-  uint32_t next_status_ms_;
-  uint32_t ping_reply_ms_;   // when the pending STATUS answering a broadcast request is due
-  uint32_t param_reply_ms_;  // when the pending PARAM_VALUE is due
-  int32_t param_reply_value_;
-  uint32_t radius_um_;
-  uint16_t pulse_us_;
-  uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
-  uint16_t servo_step_;
-  uint8_t servo_kind_;
-  uint16_t round_intensity_;  // the reading this round uses and broadcasts
-  uint16_t record_round_;     // which round of record_run_ record_ holds
-  uint16_t tx_dropped_;
-  uint8_t tx_head_;
-  uint8_t tx_count_;
-  uint8_t tx_frame_left_;  // bytes of the head frame not taken yet; 0 between frames
-  uint8_t record_run_;
-  uint8_t seq_;
-  uint8_t reset_cause_;
-  bool rx_idle_pending_;      // bytes arrived since the last parser timeout
-  bool ping_reply_pending_;   // a broadcast PING or IDENTIFY awaits its STATUS
-  bool param_reply_pending_;  // a broadcast SET_PARAM or GET_PARAM awaits its PARAM_VALUE
-  uint8_t param_reply_param_;
-  uint8_t param_reply_result_;
-  // Readings still to complete before the round's own: 2 when a round starts mid-reading (that
-  // reading mixes in light from before the round), 1 otherwise, 0 once round_intensity_ is set.
-  uint8_t readings_awaited_;
 };
 
 }  // namespace pb

@@ -557,7 +557,8 @@ def generate_cpp(definition: Definition) -> str:
         "",
         f"const uint8_t kParamCount = {len(params)};",
         "",
-        "// The parameter table lives in flash on the AVR (read through avr/pgmspace.h): 13 bytes a",
+        "// The parameter table lives in flash on the AVR (read through avr/pgmspace.h): 13 bytes"
+        " a",
         "// parameter, where a switch statement took about 37.",
         "namespace detail {",
         "struct ParamEntry {",
@@ -619,8 +620,8 @@ def generate_cpp(definition: Definition) -> str:
         "  return true;",
         "}",
         "",
-        "// Each message struct below is packed, its fields in wire order: on a little-endian machine"
-        " (the",
+        "// Each message struct below is packed, its fields in wire order: on a little-endian"
+        " machine (the",
         "// AVR, x86, ARM) its bytes are the payload, so encoding and decoding are one memcpy. A"
         " generic",
         "// table-driven codec and per-field shifts both cost the particle more flash (measured in"

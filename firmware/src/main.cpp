@@ -228,14 +228,8 @@ void serial_receive(uint32_t now_ms) {
   }
 }
 
-// A transparent XBee sends what its host wrote once RO = 3 character times (3.1 ms at 9600 baud)
-// pass without a byte, or at once at 100 bytes. Frames written back to back (two STATUS frames
-// are 104 B) would be cut apart, and every receiver would get other radios' packets between the
-// pieces. So each frame goes out alone: handed over whole, then the line stays silent from its
-// last stop bit for a gap well beyond RO before the next frame: at least 5 ms, as 6 ticks of the
-// millisecond clock.
-const uint8_t kInterFrameGapMs = 6;
-
+// Each frame goes out as an RF packet of its own: handed to the USART whole, then the line stays
+// silent for Particle::kInterFrameGapMs (longer than the XBee's packetisation timeout).
 enum TxPhase : uint8_t { kTxReady, kTxDraining, kTxGap };
 TxPhase g_tx_phase = kTxReady;
 uint32_t g_tx_gap_from_ms = 0;
@@ -253,7 +247,7 @@ void serial_transmit(uint32_t now_ms) {
     g_tx_phase = kTxGap;
   }
   if (g_tx_phase == kTxGap) {
-    if (now_ms - g_tx_gap_from_ms < kInterFrameGapMs) return;
+    if (now_ms - g_tx_gap_from_ms < pb::Particle::kInterFrameGapMs) return;
     g_tx_phase = kTxReady;
   }
   // take_tx() stops at the end of the frame at the head of the queue, and a frame fits.

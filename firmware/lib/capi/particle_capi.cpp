@@ -10,6 +10,8 @@
 #include "particle.h"
 #include "protocol_gen.h"
 
+static_assert(PB_MAX_FRAME == pb::kMaxPayload + pb::kFrameOverhead, "frame size in the C API");
+
 namespace {
 
 // The ATmega32U4's ADC at the firmware's prescaler: one conversion per 125 us, 8 per ms.
@@ -93,15 +95,11 @@ void pb_particle_tick(pb_particle *particle, uint32_t now_ms) {
 }
 
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity) {
-  // take_tx() stops at each frame's end; the PC side gets as many frames as fit, since the
-  // virtual air times and packetises the bytes itself.
-  size_t n = 0;
-  while (n < capacity) {
-    const size_t got = particle->particle.take_tx(out + n, capacity - n);
-    if (got == 0) break;
-    n += got;
-  }
-  return n;
+  return particle->particle.take_tx(out, capacity);
+}
+
+uint8_t pb_inter_frame_gap_ms(void) {
+  return pb::Particle::kInterFrameGapMs;
 }
 
 uint8_t pb_particle_id(const pb_particle *particle) {

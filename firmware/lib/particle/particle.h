@@ -96,10 +96,15 @@ class Particle : private ParticleState {
   // frame at the head of the queue, so an owner can tell frames apart (see tx_frame_open()).
   size_t take_tx(uint8_t *out, size_t capacity);
   // True while part of the head frame has been taken and the rest has not. main.cpp hands a
-  // frame to Serial1 and then keeps the line silent for longer than the XBee's packetisation
-  // timeout before the next one, so that every frame leaves as an RF packet of its own: two
-  // frames back to back can exceed one RF payload (100 B) and be cut apart in the air.
+  // frame to Serial1 and then keeps the line silent for kInterFrameGapMs before the next one.
   bool tx_frame_open() const { return tx_frame_left_ > 0; }
+  // A transparent XBee sends what its host wrote once RO = 3 character times (3.1 ms at 9600
+  // baud) pass without a byte, or at once at 100 bytes. Frames written back to back (two STATUS
+  // frames are 104 B) would be cut apart, and every receiver would get other radios' packets
+  // between the pieces. So each frame goes out alone: handed over whole, then the line stays
+  // silent from its last stop bit for at least this long (counted in whole ms from the ms the
+  // owner saw the line drain: 5-6 ms of silence) before the next frame.
+  static const uint8_t kInterFrameGapMs = 6;
   uint8_t id() const { return settings_.id(); }
 
   // ---- inspection, for the PC build and tests ----

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from particlebot.console.model import ConsoleModel
+from particlebot.console.model import Campaign, ConsoleModel
 from particlebot.protocol import FRAME_OVERHEAD, SYNC, Method
 from particlebot.radio import open_radio
 from particlebot.radio.virtual import VirtualRadio
@@ -21,6 +21,16 @@ def frame_lengths(packet: bytes) -> list[int] | None:
         lengths.append(length)
         at += length
     return lengths if at == len(packet) else None
+
+
+def finished(model: ConsoleModel, campaign: Campaign) -> bool:
+    """Waits (on the wall clock; the swarm runs as fast as it can) until campaign has ended."""
+
+    def done() -> bool:
+        model.poll()
+        return campaign.done
+
+    return wait_until(done, timeout=30)
 
 
 def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
@@ -44,11 +54,9 @@ def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
         assert wait_until(lambda: len(model.rows()) == 10, timeout=20)
         for _ in range(4):
             start = model.start(Method.COUNTING, cycle_steps=75)
-            assert wait_until(lambda: (model.poll(), start.done)[1], timeout=30)
-            assert start.success, start.outcome
+            assert finished(model, start) and start.success, start.outcome
             stop = model.stop()
-            assert wait_until(lambda: (model.poll(), stop.done)[1], timeout=30)
-            assert stop.success, stop.outcome
+            assert finished(model, stop) and stop.success, stop.outcome
     particle_packets = [data for source, data in packets if source != base_node]
     assert len(particle_packets) > 200
     not_one_frame = [data.hex() for data in particle_packets if len(frame_lengths(data) or []) != 1]

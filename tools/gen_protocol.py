@@ -518,6 +518,12 @@ def generate_cpp(definition: Definition) -> str:
         '#error "Regenerate this file with tools/gen_protocol.py (make generate)"',
         "#endif",
         "",
+        "// A function whose bool result must not be dropped (a failed decode or lookup, a refused",
+        "// change). GCC warns even when the result is cast to void: test it.",
+        "#ifndef PB_MUST_USE",
+        "#define PB_MUST_USE __attribute__((warn_unused_result))",
+        "#endif",
+        "",
         "namespace pb {",
         "",
         f"const uint32_t kDefinitionHash = 0x{definition.hash:08X}UL;",
@@ -587,7 +593,7 @@ def generate_cpp(definition: Definition) -> str:
         "",
         "// Default and range of a parameter. False for an unknown id; out may be null to test",
         "// whether an id exists.",
-        "inline bool param_spec(uint8_t param_id, ParamSpec *out) {",
+        "PB_MUST_USE inline bool param_spec(uint8_t param_id, ParamSpec *out) {",
         "  for (uint8_t i = 0; i < kParamCount; ++i) {",
         "#ifdef __AVR__",
         "    if (pgm_read_byte(&detail::kParams[i].id) != param_id) continue;",
@@ -602,7 +608,7 @@ def generate_cpp(definition: Definition) -> str:
         "}",
         "",
         "// Payload size of a message type; false for a type this definition does not know.",
-        "inline bool message_payload_size(uint8_t type, uint8_t *size) {",
+        "PB_MUST_USE inline bool message_payload_size(uint8_t type, uint8_t *size) {",
         "  uint8_t bytes;",
         "  switch (type) {",
     ]
@@ -680,7 +686,7 @@ def _cpp_message(message: MessageDef, definition: Definition) -> list[str]:
             "    return kPayloadSize;",
             "  }",
             "  // False, leaving the fields untouched, unless len == kPayloadSize.",
-            "  bool decode(const uint8_t *in, uint8_t len) {",
+            "  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {",
             "    if (len != kPayloadSize) return false;",
             "    memcpy(this, in, kPayloadSize);",
             "    return true;",
@@ -691,7 +697,8 @@ def _cpp_message(message: MessageDef, definition: Definition) -> list[str]:
             "  // Writes kPayloadSize (no) bytes and returns kPayloadSize.",
             "  uint8_t encode(uint8_t * /*out*/) const { return kPayloadSize; }",
             "  // False unless len == kPayloadSize.",
-            "  bool decode(const uint8_t * /*in*/, uint8_t len) { return len == kPayloadSize; }",
+            "  PB_MUST_USE bool decode(const uint8_t * /*in*/, uint8_t len) {"
+            " return len == kPayloadSize; }",
         ]
     out += ["} __attribute__((packed));"]
     if message.fields:

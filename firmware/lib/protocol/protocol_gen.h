@@ -19,6 +19,12 @@
 #error "Regenerate this file with tools/gen_protocol.py (make generate)"
 #endif
 
+// A function whose bool result must not be dropped (a failed decode or lookup, a refused
+// change). GCC warns even when the result is cast to void: test it.
+#ifndef PB_MUST_USE
+#define PB_MUST_USE __attribute__((warn_unused_result))
+#endif
+
 namespace pb {
 
 const uint32_t kDefinitionHash = 0xDCF5A94FUL;
@@ -216,7 +222,7 @@ const ParamEntry kParams[kParamCount] PB_PROTOCOL_FLASH = {
 
 // Default and range of a parameter. False for an unknown id; out may be null to test
 // whether an id exists.
-inline bool param_spec(uint8_t param_id, ParamSpec *out) {
+PB_MUST_USE inline bool param_spec(uint8_t param_id, ParamSpec *out) {
   for (uint8_t i = 0; i < kParamCount; ++i) {
 #ifdef __AVR__
     if (pgm_read_byte(&detail::kParams[i].id) != param_id) continue;
@@ -231,7 +237,7 @@ inline bool param_spec(uint8_t param_id, ParamSpec *out) {
 }
 
 // Payload size of a message type; false for a type this definition does not know.
-inline bool message_payload_size(uint8_t type, uint8_t *size) {
+PB_MUST_USE inline bool message_payload_size(uint8_t type, uint8_t *size) {
   uint8_t bytes;
   switch (type) {
     case 0x01:  // START
@@ -304,7 +310,7 @@ struct StartMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -320,7 +326,7 @@ struct StopMessage {
   // Writes kPayloadSize (no) bytes and returns kPayloadSize.
   uint8_t encode(uint8_t * /*out*/) const { return kPayloadSize; }
   // False unless len == kPayloadSize.
-  bool decode(const uint8_t * /*in*/, uint8_t len) { return len == kPayloadSize; }
+  PB_MUST_USE bool decode(const uint8_t * /*in*/, uint8_t len) { return len == kPayloadSize; }
 } __attribute__((packed));
 
 // SET_PARAM (from base): Set one parameter and persist it in EEPROM. Answered by PARAM_VALUE.
@@ -341,7 +347,7 @@ struct SetParamMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -365,7 +371,7 @@ struct GetParamMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -387,7 +393,7 @@ struct PingMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -410,7 +416,7 @@ struct IdentifyMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -435,7 +441,7 @@ struct SetIdMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -492,7 +498,7 @@ struct StatusMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -521,7 +527,7 @@ struct IntensityMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;
@@ -547,7 +553,7 @@ struct ParamValueMessage {
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
     memcpy(this, in, kPayloadSize);
     return true;

@@ -225,6 +225,27 @@ TEST_CASE("SET_ID renames only the addressed particle and persists") {
   CHECK(again.id() == 12);
 }
 
+TEST_CASE("SET_ID to an id no particle may take is refused and answered from the old id") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  pb::SetIdMessage set;
+  set.target = pb::kUnassignedId;
+  set.new_id = 7;
+  b.send(set);
+  REQUIRE(b.drain(frames, 4) == 1);
+  const uint8_t refused[] = {pb::kBaseStationId, pb::kUnassignedId, pb::kBroadcastId};
+  for (size_t i = 0; i < sizeof refused; ++i) {
+    set.target = 7;
+    set.new_id = refused[i];
+    b.send(set);
+    CHECK(b.particle.id() == 7);
+    REQUIRE(b.drain(frames, 4) == 1);
+    CHECK(frames[0].sender == 7);
+    CHECK(frames[0].type == static_cast<uint8_t>(pb::MessageType::STATUS));
+  }
+}
+
 namespace {
 
 // Ticks the bench one millisecond at a time from its current time until the particle queues a

@@ -10,10 +10,11 @@ BUILD := build
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 # Debian packages the offline firmware build, the emulator and the C++ checks need.
-SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev
+# clang brings libFuzzer (Debian's libclang-rt-*-dev) for the frame parser's fuzz target.
+SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev clang
 
 .PHONY: help demo test system-deps venv generate check-generated native native-asan cpp-test \
-        firmware firmware-faults harness lint format pytest bench clean
+        fuzz firmware firmware-faults harness lint format pytest bench clean
 
 help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
@@ -90,6 +91,28 @@ native-asan: $(BUILD)/native-asan/libparticle.so $(BUILD)/native-asan/firmware_t
 # The C++ unit tests of the logic, reading the golden frames in shared/vectors.toml.
 cpp-test: $(BUILD)/native-asan/firmware_tests
 	$(BUILD)/native-asan/firmware_tests shared/vectors.toml
+
+# ---- coverage-guided fuzzing of the receive path (libFuzzer, as nanopb does) --------------------
+# firmware/fuzz/corpus is committed (the golden frames and bad streams of shared/vectors.toml);
+# what a run discovers goes to build/fuzz/corpus, and a crash leaves its input in build/fuzz/.
+
+FUZZ_CXX := clang++
+FUZZ := $(BUILD)/fuzz
+FUZZ_SECONDS ?= 10
+FUZZ_SOURCES := $(filter-out firmware/lib/capi/%,$(LOGIC_SOURCES))
+
+$(FUZZ)/frame_parser_fuzz: firmware/fuzz/frame_parser_fuzz.cpp $(FUZZ_SOURCES) $(LOGIC_HEADERS) \
+    | $(BUILD)/.system-deps
+	@mkdir -p $(@D)
+	$(FUZZ_CXX) -std=gnu++11 -Wall -Wextra -Werror -g -O1 \
+	  -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all $(LOGIC_INCLUDES) \
+	  -o $@ $< $(FUZZ_SOURCES)
+
+# A bounded run: FUZZ_SECONDS of new inputs after replaying the corpus.
+fuzz: $(FUZZ)/frame_parser_fuzz
+	@mkdir -p $(FUZZ)/corpus
+	$(FUZZ)/frame_parser_fuzz -max_total_time=$(FUZZ_SECONDS) -max_len=4096 -print_final_stats=1 \
+	  -artifact_prefix=$(FUZZ)/ $(FUZZ)/corpus firmware/fuzz/corpus
 
 # ---- firmware for the particle (ATmega32U4, Debian's avr-gcc and Arduino core) ----------------
 # PlatformIO (platformio.ini) needs its own downloads; this build needs only Debian packages.
@@ -245,7 +268,7 @@ pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 	  $(VENV)/bin/pytest -q tests/firmware
 	$(VENV)/bin/pytest -q --ignore=tests/firmware tests
 
-test: system-deps venv check-generated lint cpp-test pytest
+test: system-deps venv check-generated lint cpp-test fuzz pytest
 
 demo: system-deps venv native
 	$(VENV)/bin/particlebot demo

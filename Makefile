@@ -169,6 +169,8 @@ FORCE:
 FW_CORE_SOURCES := $(wildcard $(ARDUINO_CORE)/*.c $(ARDUINO_CORE)/*.cpp $(ARDUINO_CORE)/*.S)
 FW_CORE_OBJECTS := $(patsubst $(ARDUINO_CORE)/%,$(FW)/core/%.o,$(FW_CORE_SOURCES))
 FW_LOGIC_OBJECTS := $(patsubst %,$(FW)/obj/%.o,$(FW_LOGIC_SOURCES))
+# The wiring besides main.cpp (the USB upload port).
+FW_WIRING_OBJECTS := $(patsubst %,$(FW)/obj/%.o,$(filter-out firmware/src/main.cpp,$(wildcard firmware/src/*.cpp)))
 
 $(FW)/core/%.c.o: $(ARDUINO_CORE)/%.c $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
 	@mkdir -p $(@D)
@@ -202,10 +204,12 @@ $(FW)/faults/%.cpp.o: %.cpp $(FW_FLAGS_STAMP) | $(BUILD)/.system-deps
 FW_LINK = $(AVR_CXX) $(FW_MCU) -Os -flto -fuse-linker-plugin $(FW_SIZE_FLAGS) -Wl,--gc-sections \
   -o $@ $^ -lm
 
-$(FW)/particle.elf: $(FW)/obj/firmware/src/main.cpp.o $(FW_LOGIC_OBJECTS) $(FW)/core/core.a
+$(FW)/particle.elf: $(FW)/obj/firmware/src/main.cpp.o $(FW_WIRING_OBJECTS) $(FW_LOGIC_OBJECTS) \
+    $(FW)/core/core.a
 	$(FW_LINK)
 
-$(FW)/particle-faults.elf: $(FW)/faults/firmware/src/main.cpp.o $(FW_LOGIC_OBJECTS) $(FW)/core/core.a
+$(FW)/particle-faults.elf: $(FW)/faults/firmware/src/main.cpp.o $(FW_WIRING_OBJECTS) \
+    $(FW_LOGIC_OBJECTS) $(FW)/core/core.a
 	$(FW_LINK)
 
 $(FW)/%.hex: $(FW)/%.elf

@@ -12,6 +12,8 @@
 #include <util/atomic.h>
 
 #include <new>
+
+#include "usb_upload_port.h"
 // clang-format on
 
 // ---- reset cause ----------------------------------------------------------------------------
@@ -153,17 +155,16 @@ uint32_t seed_from_noise() {
 
 // ---- watchdog -------------------------------------------------------------------------------
 
-const uint8_t kWatchdogPeriod = WDTO_250MS;
-static_assert(kWatchdogPeriod < 8, "the period's bits are WDP2..0 (WDP3 unused)");
+static_assert(kParticleWatchdogPeriod < 8, "the period's bits are WDP2..0 (WDP3 unused)");
 
 // Resets the watchdog's count, unless the USB port asked for the bootloader: a host that opened
-// the port at 1200 baud and closes it makes the core's CDC code store the bootloader's key and
+// the port at 1200 baud and closes it makes usb_upload_port.cpp store the bootloader's key and
 // set the watchdog to 120 ms, expecting it to bite. Fed on, it never would and the upload would
 // wait for the reset button. The period bits tell: only that code changes them.
 void feed_watchdog() {
 #ifndef PARTICLE_NO_USB
   const uint8_t period_bits = _BV(WDP3) | _BV(WDP2) | _BV(WDP1) | _BV(WDP0);
-  if ((WDTCSR & period_bits) != kWatchdogPeriod) return;
+  if ((WDTCSR & period_bits) != kParticleWatchdogPeriod) return;
 #endif
   wdt_reset();
 }
@@ -328,7 +329,7 @@ void setup() {
   serial_begin();
   g_particle->begin(0);  // the clock starts with the servo's frames
   servo_begin(g_particle->servo_pulse_us());
-  wdt_enable(kWatchdogPeriod);
+  wdt_enable(kParticleWatchdogPeriod);
 }
 
 void loop() {

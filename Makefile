@@ -144,9 +144,10 @@ FW_MCU := -mmcu=atmega32u4 -DF_CPU=8000000L -DARDUINO=10807 -DARDUINO_AVR_FIOV3 
 # calls and jumps at link time: together about 740 B of flash. -mstrict-X (X only for pointer
 # increments), -fno-move-loop-invariants (no registers tied up across loops) and
 # -fno-inline-small-functions (a small function called from several places stays one copy) take
-# about 430 B more off the USB image; each was measured alone and together.
+# about 430 B more off the USB image, -fno-ipa-sra and -fno-jump-tables (switches as compare
+# chains) another 110 B; each was measured alone and together, others tried gave nothing.
 FW_SIZE_FLAGS := -mcall-prologues -mrelax -mstrict-X -fno-move-loop-invariants \
-  -fno-inline-small-functions
+  -fno-inline-small-functions -fno-ipa-sra -fno-jump-tables
 FW_OPT := -Os -flto -ffunction-sections -fdata-sections $(FW_SIZE_FLAGS) -MMD -MP
 # gcc 5.4 defines DECIMAL_DIG only for C, and the core's WString.cpp needs it.
 FW_CXX_ONLY := -std=gnu++11 -fno-exceptions -fno-threadsafe-statics -DDECIMAL_DIG=__DECIMAL_DIG__

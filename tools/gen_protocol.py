@@ -632,6 +632,8 @@ def generate_cpp(definition: Definition) -> str:
         " generic",
         "// table-driven codec and per-field shifts both cost the particle more flash (measured in"
         " README).",
+        "// A packed field binds only to a const reference or a copy (test macros take"
+        " references).",
         "#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__",
         '#error "The message structs are the wire layout only on a little-endian machine"',
         "#endif",

@@ -7,6 +7,7 @@
 
 #include "estimation.h"
 #include "frame.h"
+#include "light_sampler.h"
 #include "particle.h"
 #include "protocol_gen.h"
 
@@ -130,6 +131,10 @@ size_t pb_particle_eeprom(const pb_particle *particle, uint8_t *out, size_t capa
 
 uint32_t pb_definition_hash(void) {
   return pb::kDefinitionHash;
+}
+
+uint16_t pb_calibrated_reading(uint16_t raw, uint16_t gamma_milli, uint16_t gain_milli) {
+  return pb::calibrated_reading(raw, pb::sensor_calibration(gamma_milli, gain_milli));
 }
 
 uint8_t pb_estimate(uint8_t method, uint16_t own_intensity, const uint16_t *others,

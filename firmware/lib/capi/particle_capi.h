@@ -65,6 +65,10 @@ size_t pb_particle_eeprom(const pb_particle *particle, uint8_t *out, size_t capa
 
 uint32_t pb_definition_hash(void);
 
+// A photocell's raw reading (0..1023) as the particle corrects it before averaging, for the
+// calibration parameters SENSOR_GAMMA_k = gamma_milli and SENSOR_GAIN_k = gain_milli.
+uint16_t pb_calibrated_reading(uint16_t raw, uint16_t gamma_milli, uint16_t gain_milli);
+
 // S_n of a particle reading own_intensity when the others read others[0..others_count) in its
 // estimation round. method is the protocol's method enum; the rest are the parameters of the
 // same names (GROUPS = 0: one group per particle heard).

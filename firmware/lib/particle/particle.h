@@ -28,6 +28,8 @@ struct ParticleState {
   int32_t param_reply_value_;
   uint32_t radius_um_;
   uint16_t pulse_us_;
+  uint16_t hold_pulse_us_;  // SERVO_HOLD's pulse while HOLDING, 0 otherwise
+  uint32_t hold_until_ms_;
   uint32_t servo_start_ms_;  // the motion and step radius_um_ was worked out for
   uint16_t servo_step_;
   uint8_t servo_kind_;
@@ -57,10 +59,12 @@ class Particle : private ParticleState {
  public:
   // Bytes of radio output that can wait for Serial1; a frame that does not fit is dropped whole.
   static const uint8_t kTxCapacity = 128;
+  // The longest a SERVO_HOLD holds: a servo stalled against the body heats up.
+  static const uint8_t kMaxHoldS = 60;
   // A broadcast request that draws a reply (PING, IDENTIFY, SET_PARAM, GET_PARAM) is answered in
   // a random one of this many slots once a round has told the group size (kPingSlotsUnknown
   // before): a swarm answering at once would overflow the base station's 9600-baud radio. A slot
-  // holds one STATUS frame on the air (52 B: 54 ms at 9600), and at most kPingSlotsMax slots keep
+  // holds one STATUS frame on the air (54 B: 56 ms at 9600), and at most kPingSlotsMax slots keep
   // every answer within a second.
   static const uint16_t kPingSlotMs = 60;
   static const uint8_t kPingSlotsUnknown = 10;
@@ -89,8 +93,9 @@ class Particle : private ParticleState {
   void tick(uint32_t now_ms, uint32_t servo_ms);
   void tick(uint32_t now_ms) { tick(now_ms, now_ms); }
 
-  // Pulse the servo driver must output from its next 50 Hz frame (500..2500 us).
-  uint16_t servo_pulse_us() const { return pulse_us_; }
+  // Pulse the servo driver must output from its next 50 Hz frame (500..2500 us): the motion's
+  // through the calibration table, or the one a SERVO_HOLD set.
+  uint16_t servo_pulse_us() const { return hold_pulse_us_ != 0 ? hold_pulse_us_ : pulse_us_; }
   uint32_t radius_um() const { return radius_um_; }
   // Moves up to capacity queued bytes into out; returns how many. Never goes past the end of the
   // frame at the head of the queue, so an owner can tell frames apart (see tx_frame_open()).
@@ -100,7 +105,7 @@ class Particle : private ParticleState {
   bool tx_frame_open() const { return tx_frame_left_ > 0; }
   // A transparent XBee sends what its host wrote once RO = 3 character times (3.1 ms at 9600
   // baud) pass without a byte, or at once at 100 bytes. Frames written back to back (two STATUS
-  // frames are 104 B) would be cut apart, and every receiver would get other radios' packets
+  // frames are 108 B) would be cut apart, and every receiver would get other radios' packets
   // between the pieces. So each frame goes out alone: handed over whole, then the line stays
   // silent from its last stop bit for at least this long (counted in whole ms from the ms the
   // owner saw the line drain: 5-6 ms of silence) before the next frame.
@@ -108,13 +113,12 @@ class Particle : private ParticleState {
   uint8_t id() const { return settings_.id(); }
 
   // ---- inspection, for the PC build and tests ----
-  State state() const { return coordinator_.state(); }
+  State state() const { return hold_pulse_us_ != 0 ? State::HOLDING : coordinator_.state(); }
   // STATUS payload as it would be sent now (StatusMessage::kPayloadSize bytes into out).
   uint8_t status_payload(uint8_t *out) const;
   size_t tx_pending() const { return tx_count_; }
   uint16_t tx_dropped_frames() const { return tx_dropped_; }
   const Settings &settings() const { return settings_; }
-  const LightSampler &sampler() const { return sampler_; }
   const Coordinator &coordinator() const { return coordinator_; }
 
  private:
@@ -126,7 +130,10 @@ class Particle : private ParticleState {
   void use_record(uint8_t run_id, uint16_t round);
   void begin_round_record(uint16_t round);
   void finish_round();
-  void refresh_geometry();
+  // Copies what the settings say about the stroke and the photocells to where it is used.
+  void refresh_from_settings();
+  void handle_servo_hold(const ServoHoldMessage &m, uint32_t now_ms);
+  void end_hold() { hold_pulse_us_ = 0; }
   void update_servo(uint32_t now_ms, bool table_changed = false);
   uint32_t radius_at(uint32_t now_ms) const;
   void send(MessageType type, const uint8_t *payload, uint8_t len);

@@ -1,6 +1,6 @@
 // Radio protocol of the particles: constants, enums and message structs with their encoders.
 // Generated from shared/protocol.toml by tools/gen_protocol.py; do not edit.
-// Definition hash 0xDCF5A94F (kDefinitionHash, sent in every STATUS).
+// Definition hash 0xF1AAC96B (kDefinitionHash, sent in every STATUS).
 #ifndef PARTICLEBOT_PROTOCOL_GEN_H
 #define PARTICLEBOT_PROTOCOL_GEN_H
 
@@ -27,7 +27,7 @@
 
 namespace pb {
 
-const uint32_t kDefinitionHash = 0xDCF5A94FUL;
+const uint32_t kDefinitionHash = 0xF1AAC96BUL;
 const uint8_t kSync0 = 0xA5;
 const uint8_t kSync1 = 0x5A;
 // Payload bytes at most; LEN counts payload bytes only.
@@ -57,6 +57,9 @@ enum class State : uint8_t {
   DONE = 6,
   // Wiggling so a person can see which particle this is.
   IDENTIFYING = 7,
+  // Holding the servo at the pulse a SERVO_HOLD asked for (servo calibration), until its time runs
+  // out, STOP, START or IDENTIFY.
+  HOLDING = 8,
 };
 
 // Position-estimation method of SI section S4.
@@ -102,6 +105,31 @@ enum class Param : uint8_t {
   RADIUS_MIN_UM = 13,
   // Fully expanded radius in micrometres (R_min + Delta R).
   RADIUS_MAX_UM = 14,
+  // Photocell A0's gamma (eq. 7) in thousandths; 1000 means gamma = 1, the law eq. 14 assumes.
+  SENSOR_GAMMA_0 = 16,
+  // Photocell A1's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_1 = 17,
+  // Photocell A2's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_2 = 18,
+  // Photocell A3's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_3 = 19,
+  // Photocell A4's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_4 = 20,
+  // Photocell A5's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_5 = 21,
+  // Photocell A0's gain in thousandths: the factor on its gamma-corrected resistance ratio; 1000
+  // leaves it.
+  SENSOR_GAIN_0 = 22,
+  // Photocell A1's gain in thousandths.
+  SENSOR_GAIN_1 = 23,
+  // Photocell A2's gain in thousandths.
+  SENSOR_GAIN_2 = 24,
+  // Photocell A3's gain in thousandths.
+  SENSOR_GAIN_3 = 25,
+  // Photocell A4's gain in thousandths.
+  SENSOR_GAIN_4 = 26,
+  // Photocell A5's gain in thousandths.
+  SENSOR_GAIN_5 = 27,
   // Servo pulse (us) at calibration point 0 of 9 (R_min).
   SERVO_CAL_0 = 32,
   // Servo pulse (us) at calibration point 1 of 9.
@@ -128,10 +156,15 @@ enum class ParamResult : uint8_t {
   OK = 0,
   // No parameter has that number.
   UNKNOWN_PARAM = 1,
-  // Value outside the parameter's min..max, or it would make the servo table non-monotonic.
+  // Value outside the parameter's min..max.
   OUT_OF_RANGE = 2,
   // Refused while running; STOP first.
   BUSY = 3,
+  // Inside min..max, but the nine SERVO_CAL pulses would no longer rise (or fall) from point 0 to
+  // point 8: change the neighbouring points first.
+  SERVO_TABLE_NOT_MONOTONIC = 4,
+  // Inside min..max, but RADIUS_MIN_UM would no longer be below RADIUS_MAX_UM.
+  RADIUS_MIN_NOT_BELOW_MAX = 5,
 };
 
 // Message types, the TYPE byte of a frame.
@@ -143,6 +176,7 @@ enum class MessageType : uint8_t {
   PING = 0x05,
   IDENTIFY = 0x06,
   SET_ID = 0x07,
+  SERVO_HOLD = 0x08,
   STATUS = 0x20,
   INTENSITY = 0x21,
   PARAM_VALUE = 0x22,
@@ -155,7 +189,7 @@ struct ParamSpec {
   int32_t max;
 };
 
-const uint8_t kParamCount = 23;
+const uint8_t kParamCount = 35;
 
 // The parameter table lives in flash on the AVR (read through avr/pgmspace.h): 13 bytes a
 // parameter, where a switch statement took about 37.
@@ -198,6 +232,30 @@ const ParamEntry kParams[kParamCount] PB_PROTOCOL_FLASH = {
     {13, {77500L, 50000L, 150000L}},
     // RADIUS_MAX_UM
     {14, {117500L, 50000L, 150000L}},
+    // SENSOR_GAMMA_0
+    {16, {1000, 250, 4000}},
+    // SENSOR_GAMMA_1
+    {17, {1000, 250, 4000}},
+    // SENSOR_GAMMA_2
+    {18, {1000, 250, 4000}},
+    // SENSOR_GAMMA_3
+    {19, {1000, 250, 4000}},
+    // SENSOR_GAMMA_4
+    {20, {1000, 250, 4000}},
+    // SENSOR_GAMMA_5
+    {21, {1000, 250, 4000}},
+    // SENSOR_GAIN_0
+    {22, {1000, 100, 10000}},
+    // SENSOR_GAIN_1
+    {23, {1000, 100, 10000}},
+    // SENSOR_GAIN_2
+    {24, {1000, 100, 10000}},
+    // SENSOR_GAIN_3
+    {25, {1000, 100, 10000}},
+    // SENSOR_GAIN_4
+    {26, {1000, 100, 10000}},
+    // SENSOR_GAIN_5
+    {27, {1000, 100, 10000}},
     // SERVO_CAL_0
     {32, {1000, 500, 2500}},
     // SERVO_CAL_1
@@ -261,8 +319,11 @@ PB_MUST_USE inline bool message_payload_size(uint8_t type, uint8_t *size) {
     case 0x07:  // SET_ID
       bytes = 2;
       break;
+    case 0x08:  // SERVO_HOLD
+      bytes = 4;
+      break;
     case 0x20:  // STATUS
-      bytes = 44;
+      bytes = 46;
       break;
     case 0x21:  // INTENSITY
       bytes = 6;
@@ -280,6 +341,7 @@ PB_MUST_USE inline bool message_payload_size(uint8_t type, uint8_t *size) {
 // Each message struct below is packed, its fields in wire order: on a little-endian machine (the
 // AVR, x86, ARM) its bytes are the payload, so encoding and decoding are one memcpy. A generic
 // table-driven codec and per-field shifts both cost the particle more flash (measured in README).
+// A packed field binds only to a const reference or a copy (test macros take references).
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "The message structs are the wire layout only on a little-endian machine"
 #endif
@@ -449,11 +511,43 @@ struct SetIdMessage {
 } __attribute__((packed));
 static_assert(sizeof(SetIdMessage) == SetIdMessage::kPayloadSize, "packed wire layout");
 
+// SERVO_HOLD (from base): Servo calibration: make one resting particle (IDLE or DONE) hold its
+// servo at pulse_us for hold_s seconds, so a person can measure the radius that pulse gives. It
+// answers at once with STATUS: state HOLDING and servo_pulse_us = pulse_us when the hold took
+// effect, its unchanged state otherwise (running, or a pulse outside 500..2500 us). A new
+// SERVO_HOLD moves the pulse and restarts the time; hold_s = 0, STOP, START or IDENTIFY end the
+// hold, and the servo goes straight back to the pulse of the contracted radius. Never persisted.
+struct ServoHoldMessage {
+  static const MessageType kType = MessageType::SERVO_HOLD;
+  static const uint8_t kPayloadSize = 4;
+
+  // Id of the particle to hold (a broadcast is ignored).
+  uint8_t target;
+  // Servo pulse to hold, microseconds (500..2500).
+  uint16_t pulse_us;
+  // Seconds to hold, at most 60 (larger values hold 60) so that a forgotten hold cannot overheat
+  // the servo; resend to hold longer. 0 ends a hold.
+  uint8_t hold_s;
+
+  // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
+  uint8_t encode(uint8_t *out) const {
+    memcpy(out, this, kPayloadSize);
+    return kPayloadSize;
+  }
+  // False, leaving the fields untouched, unless len == kPayloadSize.
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
+    if (len != kPayloadSize) return false;
+    memcpy(this, in, kPayloadSize);
+    return true;
+  }
+} __attribute__((packed));
+static_assert(sizeof(ServoHoldMessage) == ServoHoldMessage::kPayloadSize, "packed wire layout");
+
 // STATUS (from particle): Periodic report of a particle's state, every STATUS_PERIOD_MS and on
 // PING.
 struct StatusMessage {
   static const MessageType kType = MessageType::STATUS;
-  static const uint8_t kPayloadSize = 44;
+  static const uint8_t kPayloadSize = 46;
 
   // What the particle is doing. (enum State)
   uint8_t state;
@@ -467,13 +561,15 @@ struct StatusMessage {
   uint8_t group_size;
   // Bit k set: sensor k is stuck at 0 or 1023 and left out of the intensity.
   uint8_t sensor_faults;
-  // Mean of the healthy sensors' 50-sample averages (0..1023).
+  // Mean of the healthy sensors' 50-sample averages after each one's calibration (SENSOR_GAMMA_k,
+  // SENSOR_GAIN_k) (0..1023).
   uint16_t intensity;
-  // Each sensor's 50-sample average (0..1023), A0..A5.
+  // Each sensor's 50-sample average as read, before calibration (0..1023), A0..A5.
   uint16_t sensors[6];
   // Position within the current expansion-contraction cycle in 1/1000 of T; 0 outside a cycle.
   uint16_t cycle_phase;
-  // Radius commanded now, micrometres.
+  // Radius the motion commands now, micrometres (while HOLDING, the motion's contracted radius: the
+  // servo then gets servo_pulse_us directly).
   uint32_t radius_um;
   // Milliseconds since reset (wraps after 49 days).
   uint32_t uptime_ms;
@@ -491,6 +587,9 @@ struct StatusMessage {
   uint8_t resets;
   // MCUSR at the last reset: bit 0 power-on, 1 external, 2 brown-out, 3 watchdog.
   uint8_t last_reset_cause;
+  // Servo pulse going out now, microseconds (through the SERVO_CAL table, or the one a SERVO_HOLD
+  // set).
+  uint16_t servo_pulse_us;
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
@@ -578,6 +677,8 @@ const MessageType IdentifyMessage::kType;
 const uint8_t IdentifyMessage::kPayloadSize;
 const MessageType SetIdMessage::kType;
 const uint8_t SetIdMessage::kPayloadSize;
+const MessageType ServoHoldMessage::kType;
+const uint8_t ServoHoldMessage::kPayloadSize;
 const MessageType StatusMessage::kType;
 const uint8_t StatusMessage::kPayloadSize;
 const MessageType IntensityMessage::kType;

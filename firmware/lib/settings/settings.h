@@ -67,17 +67,17 @@ class Settings {
 
   uint8_t id() const { return id_; }
   // Any id but the base station's, broadcast and unassigned (1..253); false otherwise.
-  bool set_id(uint8_t id);
+  PB_MUST_USE bool set_id(uint8_t id);
   uint8_t resets() const { return resets_; }
   uint8_t last_reset_cause() const { return reset_cause_; }
 
   // False for an unknown parameter id.
-  bool get(uint8_t param, int32_t *value) const;
+  PB_MUST_USE bool get(uint8_t param, int32_t *value) const;
   // The value of a known parameter.
   int32_t get(Param param) const;
-  // Range checks, then stores the value, writing only the bytes that change. RADIUS_MIN_UM must
-  // stay below RADIUS_MAX_UM and the servo table monotonic, or OUT_OF_RANGE. (BUSY is the
-  // caller's decision.)
+  // Range checks, then stores the value, writing only the bytes that change: OUT_OF_RANGE outside
+  // min..max, RADIUS_MIN_NOT_BELOW_MAX unless RADIUS_MIN_UM stays below RADIUS_MAX_UM,
+  // SERVO_TABLE_NOT_MONOTONIC unless the servo table stays monotonic. (BUSY is the caller's.)
   ParamResult set(uint8_t param, int32_t value);
   void servo_table(uint16_t table[kServoCalPoints]) const;
 
@@ -89,7 +89,7 @@ class Settings {
   int32_t read_value(uint8_t param) const;
   void write_value(uint8_t param, int32_t value);
   void write_byte(uint16_t address, uint8_t value);
-  bool acceptable(uint8_t param, int32_t value) const;
+  ParamResult check(uint8_t param, int32_t value) const;
 
   Storage &storage_;
   uint8_t id_;

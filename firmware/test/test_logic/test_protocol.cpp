@@ -343,6 +343,13 @@ void check_fields(const pb::Frame &frame, const Entry &vector, const Bytes &byte
     c.scalar("target", m.target);
     c.scalar("new_id", m.new_id);
     check_reencodes(m, vector, bytes);
+  } else if (type == "SERVO_HOLD") {
+    REQUIRE(frame.type == static_cast<uint8_t>(pb::MessageType::SERVO_HOLD));
+    const pb::ServoHoldMessage m = decoded<pb::ServoHoldMessage>(frame);
+    c.scalar("target", m.target);
+    c.scalar("pulse_us", m.pulse_us);
+    c.scalar("hold_s", m.hold_s);
+    check_reencodes(m, vector, bytes);
   } else if (type == "STATUS") {
     REQUIRE(frame.type == static_cast<uint8_t>(pb::MessageType::STATUS));
     const pb::StatusMessage m = decoded<pb::StatusMessage>(frame);
@@ -366,6 +373,7 @@ void check_fields(const pb::Frame &frame, const Entry &vector, const Bytes &byte
     c.scalar("rx_skipped_bytes", m.rx_skipped_bytes);
     c.scalar("resets", m.resets);
     c.scalar("last_reset_cause", m.last_reset_cause);
+    c.scalar("servo_pulse_us", m.servo_pulse_us);
     check_reencodes(m, vector, bytes);
   } else if (type == "INTENSITY") {
     REQUIRE(frame.type == static_cast<uint8_t>(pb::MessageType::INTENSITY));

@@ -62,6 +62,10 @@ def _declare(lib: ctypes.CDLL) -> None:
         "pb_particle_status_payload": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
         "pb_particle_eeprom": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
         "pb_definition_hash": (ctypes.c_uint32, []),
+        "pb_calibrated_reading": (
+            ctypes.c_uint16,
+            [ctypes.c_uint16, ctypes.c_uint16, ctypes.c_uint16],
+        ),
         "pb_estimate": (
             ctypes.c_uint8,
             [
@@ -281,6 +285,12 @@ def inter_frame_gap_ms() -> int:
     """The silence the firmware keeps on its serial port between two frames, so that its XBee
     sends each frame as an RF packet of its own."""
     return int(load_library().pb_inter_frame_gap_ms())
+
+
+def calibrated_reading(raw: int, gamma_milli: int, gain_milli: int) -> int:
+    """A photocell's raw reading (0..1023) as the firmware corrects it for the calibration
+    parameters SENSOR_GAMMA_k = gamma_milli and SENSOR_GAIN_k = gain_milli (thousandths)."""
+    return int(load_library().pb_calibrated_reading(raw, gamma_milli, gain_milli))
 
 
 def definition_hash() -> int:

@@ -45,8 +45,9 @@ Settings::Settings(Storage &storage)
     : storage_(storage), id_(kUnassignedId), resets_(0), reset_cause_(0) {}
 
 bool Settings::load() {
-  const bool valid = block_valid();
-  if (!valid) write_defaults();
+  const Block block = check_block();
+  if (block != kBlockValid) write_defaults(block == kBlockOtherParams);
+  const bool valid = block == kBlockValid;
   id_ = storage_.read(eeprom_layout::kIdAddress);
   resets_ = storage_.read(eeprom_layout::kResetsAddress);
   reset_cause_ = storage_.read(eeprom_layout::kResetCauseAddress);
@@ -113,32 +114,37 @@ ParamResult Settings::check(uint8_t param, int32_t value) const {
   return ParamResult::OK;
 }
 
-bool Settings::block_valid() const {
+Settings::Block Settings::check_block() const {
   using namespace eeprom_layout;
-  if (storage_.read(0) != kMagic0 || storage_.read(1) != kMagic1) return false;
-  if (storage_.read(kVersionAddress) != kVersion) return false;
-  if (storage_.read(kCountAddress) != kParamCount) return false;
+  if (storage_.read(0) != kMagic0 || storage_.read(1) != kMagic1) return kBlockInvalid;
+  if (storage_.read(kVersionAddress) != kVersion) return kBlockInvalid;
   const uint16_t stored = static_cast<uint16_t>(
       storage_.read(kCrcAddress) | static_cast<uint16_t>(storage_.read(kCrcAddress + 1) << 8));
+  if (stored != compute_crc()) return kBlockInvalid;
   // Values are not range-checked again: set() admitted them, a firmware with other ranges must
   // bump kVersion, and every consumer copes with odd values anyway (no division by zero).
-  return stored == compute_crc();
+  return storage_.read(kCountAddress) == kParamCount ? kBlockValid : kBlockOtherParams;
 }
 
-void Settings::write_defaults() {
+void Settings::write_defaults(bool keep_valid_values) {
   using namespace eeprom_layout;
-  write_byte(0, kMagic0);
-  write_byte(1, kMagic1);
-  write_byte(kVersionAddress, kVersion);
+  if (!keep_valid_values) {
+    write_byte(0, kMagic0);
+    write_byte(1, kMagic1);
+    write_byte(kVersionAddress, kVersion);
+    write_byte(kIdAddress, kUnassignedId);
+    write_byte(kResetsAddress, 0);
+    write_byte(kResetCauseAddress, 0);
+  }
   write_byte(kCountAddress, kParamCount);
-  write_byte(kIdAddress, kUnassignedId);
-  write_byte(kResetsAddress, 0);
-  write_byte(kResetCauseAddress, 0);
   // Slots of ids the protocol lacks keep whatever they hold (the CRC covers them): on a new chip
   // that spares ~220 writes of 3.4 ms each.
   ParamSpec spec;
   for (uint8_t param = 0; param < kParamSlots; ++param) {
-    if (param_spec(param, &spec)) write_value(param, spec.default_value);
+    if (!param_spec(param, &spec)) continue;
+    const int32_t value = read_value(param);
+    if (keep_valid_values && value >= spec.min && value <= spec.max) continue;
+    write_value(param, spec.default_value);
   }
   update_crc();
 }

@@ -58,9 +58,13 @@ class Settings {
  public:
   explicit Settings(Storage &storage);
 
-  // Checks the stored block. A blank or corrupt one (bad magic, version, count or CRC) is
-  // replaced by the defaults with the unassigned id and no resets.
-  // Returns true when the block was valid.
+  // Checks the stored block. A blank or corrupt one (bad magic, version or CRC) is replaced by
+  // the defaults with the unassigned id and no resets. A sound block from a firmware with other
+  // parameters (a firmware update that added some) keeps the id, the reset count and every value
+  // inside its parameter's range; the others, among them the new parameters' slots, which an
+  // erased or never-written EEPROM leaves at -1, get their defaults. (So a parameter's range
+  // must not contain -1, and an id that once meant another parameter must not be reused.)
+  // Returns true when the block was valid as it was.
   bool load();
   // Counts a reset (saturating at 255) and stores its cause (MCUSR).
   void record_reset(uint8_t cause);
@@ -82,8 +86,14 @@ class Settings {
   void servo_table(uint16_t table[kServoCalPoints]) const;
 
  private:
-  bool block_valid() const;
-  void write_defaults();
+  // A block in this layout but written by a firmware with other parameters (another count) is
+  // carried over rather than reset: see load().
+  enum Block : uint8_t { kBlockValid, kBlockOtherParams, kBlockInvalid };
+  Block check_block() const;
+  // Every parameter to its default (keep_valid_values: only those whose stored value is outside
+  // its range), the count to this firmware's; without keep_valid_values also the header, the
+  // unassigned id and no resets.
+  void write_defaults(bool keep_valid_values);
   uint16_t compute_crc() const;
   void update_crc();
   int32_t read_value(uint8_t param) const;

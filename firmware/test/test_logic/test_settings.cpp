@@ -2,6 +2,7 @@
 #include <doctest.h>
 #include <string.h>
 
+#include "frame.h"
 #include "protocol_gen.h"
 #include "settings.h"
 
@@ -69,6 +70,42 @@ TEST_CASE("values, id and resets survive a reload; a corrupt byte brings back th
   CHECK_FALSE(corrupt.load());
   CHECK(corrupt.id() == pb::kUnassignedId);
   CHECK(corrupt.get(pb::Param::CYCLE_STEPS) == 150);
+}
+
+TEST_CASE("a block from a firmware with other parameters keeps the id and valid values") {
+  // What a firmware with fewer parameters left: its count, its values, and the slots of the
+  // parameters it did not know never written (erased bytes), under a valid CRC.
+  namespace layout = pb::eeprom_layout;
+  CountingStorage storage;
+  {
+    pb::Settings s(storage);
+    s.load();
+    s.record_reset(0x01);
+    CHECK(s.set_id(42));
+    CHECK(s.set(id_of(pb::Param::SERVO_CAL_8), 1900) == pb::ParamResult::OK);
+    CHECK(s.set(id_of(pb::Param::CYCLE_STEPS), 300) == pb::ParamResult::OK);
+  }
+  const uint8_t unknown_then[] = {id_of(pb::Param::SENSOR_GAMMA_2),
+                                  id_of(pb::Param::SENSOR_GAIN_5)};
+  for (size_t i = 0; i < sizeof unknown_then; ++i) {
+    memset(storage.bytes + layout::kParamsAddress + 4 * unknown_then[i], 0xFF, 4);
+  }
+  storage.bytes[layout::kCountAddress] = pb::kParamCount - 12;
+  const uint16_t crc = pb::crc16(storage.bytes, layout::kCrcAddress);
+  storage.bytes[layout::kCrcAddress] = static_cast<uint8_t>(crc);
+  storage.bytes[layout::kCrcAddress + 1] = static_cast<uint8_t>(crc >> 8);
+
+  pb::Settings updated(storage);
+  CHECK_FALSE(updated.load());  // not as it was: it had to be carried over
+  CHECK(updated.id() == 42);
+  CHECK(updated.resets() == 1);
+  CHECK(updated.get(pb::Param::SERVO_CAL_8) == 1900);
+  CHECK(updated.get(pb::Param::CYCLE_STEPS) == 300);
+  CHECK(updated.get(pb::Param::SENSOR_GAMMA_2) == 1000);
+  CHECK(updated.get(pb::Param::SENSOR_GAIN_5) == 1000);
+  pb::Settings again(storage);
+  CHECK(again.load());
+  CHECK(again.id() == 42);
 }
 
 TEST_CASE("set checks the id and the range and leaves the value alone when refused") {

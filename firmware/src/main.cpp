@@ -134,15 +134,17 @@ bool adc_busy() {
 }
 
 // Runs once, before the Particle exists (it needs the seed to be built), so this short wait
-// (40 conversions, about 4.5 ms) is the only place that waits on the ADC. The photocells come
-// last so that the reference has settled back to AVcc when the sampling proper begins.
+// (40 conversions, about 4.5 ms) is the only place that waits on the ADC. Photocells A0..A3 come
+// last, between the floating pin's conversions, so that the reference has settled back to AVcc
+// when the sampling proper begins. (Stepping through four of them rather than six spares a
+// division: 46 B of flash.)
 uint32_t seed_from_noise() {
   uint32_t seed = 2166136261u;  // FNV-1a over the raw readings
   for (uint8_t i = 0; i < 40; ++i) {
     if (i < 8) {
       adc_start(kTemperatureChannel, kRefInternal);
     } else {
-      adc_start(i & 1 ? kFloatingChannel : sensor_channel(i % 6));
+      adc_start(i & 1 ? kFloatingChannel : sensor_channel((i >> 1) & 3));
     }
     while (adc_busy()) {
     }

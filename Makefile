@@ -27,7 +27,9 @@ help:
 # The stamp is an included makefile: when make has to create it (installing the packages), it
 # then reads this Makefile again, so the wildcards below (the Arduino core's sources) see the
 # files the packages just installed. Goals that need no package (help, clean) skip it.
-$(BUILD)/.system-deps:
+# It depends on the Makefile, so that a package added to SYSTEM_PACKAGES is installed on a machine
+# that was set up before (checking the list again takes a fraction of a second).
+$(BUILD)/.system-deps: Makefile
 	@missing=$$(for p in $(SYSTEM_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
 	if [ -n "$$missing" ]; then \
 	  echo "Installing Debian packages:" $$missing; \

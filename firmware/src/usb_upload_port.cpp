@@ -57,7 +57,7 @@ const uint32_t kTouchBaud = 1200;
 
 // Caterina stays in the bootloader after a watchdog reset when it finds this key in RAM: at
 // RAMEND - 1 for a bootloader that says so at the end of flash, at 0x0800 for the older ones
-// (the Fio v3's). Neither spot is in use by the firmware (static data ends near 0x0420 and the
+// (the Fio v3's). Neither spot is in use by the firmware (static data ends below 0x0400 and the
 // stack never comes down to 0x0800).
 const uint16_t kBootKey = 0x7777;
 const uint16_t kNewBootloaderSignature = 0xDCFB;

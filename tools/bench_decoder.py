@@ -15,7 +15,7 @@ from particlebot.protocol import (
     encode_frame,
 )
 
-# 9600 baud 8N1 carries 960 bytes/s; a STATUS frame is 52 bytes.
+# 9600 baud 8N1 carries 960 bytes/s; a STATUS frame is 54 bytes.
 LINK_CEILING_FRAMES_PER_S = 960 / (Status.PAYLOAD_SIZE + 8)
 
 
@@ -42,6 +42,7 @@ def status_stream(count: int, seed: int) -> bytes:
             rx_skipped_bytes=0,
             resets=1,
             last_reset_cause=1,
+            servo_pulse_us=1400,
         )
         frames.append(encode_frame(status, rng.randrange(1, 254), seq & 0xFF))
     return b"".join(frames)

@@ -64,7 +64,7 @@ def status_packets(count: int, senders: int = 10) -> list[Packet]:
             state=3, method=3, run_id=1, s_n=sender, group_size=senders, sensor_faults=0,
             intensity=900 - sender, sensors=(900,) * 6, cycle_phase=seq % 1000, radius_um=90000,
             uptime_ms=seq * 200, definition_hash=DEFINITION_HASH, rx_frames=seq, rx_bad_crc=0,
-            rx_bad_length=0, rx_skipped_bytes=0, resets=1, last_reset_cause=1,
+            rx_bad_length=0, rx_skipped_bytes=0, resets=1, last_reset_cause=1, servo_pulse_us=1400,
         )  # fmt: skip
         data = encode_frame(status, sender, seq & 0xFF)
         packets.append(Packet(data, f"radio-{sender}", 1000.0 + seq * 0.001))

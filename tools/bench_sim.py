@@ -148,7 +148,7 @@ def step_errors(
 
 def servo_timing(seconds: float) -> dict[str, float]:
     """Five particles run a wave while the base station PINGs them all every 0.5 s (each PING
-    brings five 52-byte STATUS frames onto the air) and noise takes ~25 % of the channel's
+    brings five 54-byte STATUS frames onto the air) and noise takes ~25 % of the channel's
     serial capacity; every particle keeps sampling its photocells throughout."""
     rng = random.Random(5)
     with EmulatedSwarm(SwarmConfig(count=5, params={Param.ROUND_MS: 1000})) as swarm:

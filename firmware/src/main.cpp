@@ -12,6 +12,8 @@
 #include <util/atomic.h>
 
 #include <new>
+
+#include "usb_upload_port.h"
 // clang-format on
 
 // ---- reset cause ----------------------------------------------------------------------------
@@ -124,7 +126,7 @@ void adc_start(uint8_t channel, uint8_t reference = kRefAvcc) {
   } else {
     ADCSRB &= ~_BV(MUX5);
   }
-  ADCSRA |= _BV(ADSC);  // init() left the ADC enabled at clk/64 = 125 kHz
+  ADCSRA |= _BV(ADSC);  // main() enabled the ADC at clk/64 = 125 kHz
 }
 
 bool adc_busy() {
@@ -132,15 +134,17 @@ bool adc_busy() {
 }
 
 // Runs once, before the Particle exists (it needs the seed to be built), so this short wait
-// (40 conversions, about 4.5 ms) is the only place that waits on the ADC. The photocells come
-// last so that the reference has settled back to AVcc when the sampling proper begins.
+// (40 conversions, about 4.5 ms) is the only place that waits on the ADC. Photocells A0..A3 come
+// last, between the floating pin's conversions, so that the reference has settled back to AVcc
+// when the sampling proper begins. (Stepping through four of them rather than six spares a
+// division: 46 B of flash.)
 uint32_t seed_from_noise() {
   uint32_t seed = 2166136261u;  // FNV-1a over the raw readings
   for (uint8_t i = 0; i < 40; ++i) {
     if (i < 8) {
       adc_start(kTemperatureChannel, kRefInternal);
     } else {
-      adc_start(i & 1 ? kFloatingChannel : sensor_channel(i % 6));
+      adc_start(i & 1 ? kFloatingChannel : sensor_channel((i >> 1) & 3));
     }
     while (adc_busy()) {
     }
@@ -149,6 +153,22 @@ uint32_t seed_from_noise() {
     seed = (seed ^ (raw >> 8)) * 16777619u;
   }
   return seed;
+}
+
+// ---- watchdog -------------------------------------------------------------------------------
+
+static_assert(kParticleWatchdogPeriod < 8, "the period's bits are WDP2..0 (WDP3 unused)");
+
+// Resets the watchdog's count, unless the USB port asked for the bootloader: a host that opened
+// the port at 1200 baud and closes it makes usb_upload_port.cpp store the bootloader's key and
+// set the watchdog to 120 ms, expecting it to bite. Fed on, it never would and the upload would
+// wait for the reset button. The period bits tell: only that code changes them.
+void feed_watchdog() {
+#ifndef PARTICLE_NO_USB
+  const uint8_t period_bits = _BV(WDP3) | _BV(WDP2) | _BV(WDP1) | _BV(WDP0);
+  if ((WDTCSR & period_bits) != kParticleWatchdogPeriod) return;
+#endif
+  wdt_reset();
 }
 
 // ---- EEPROM -------------------------------------------------------------------------------
@@ -162,7 +182,7 @@ class EepromStorage : public pb::Storage {
   void write(uint16_t address, uint8_t value) override {
     if (address > E2END) return;
     // Each changed byte costs ~3.4 ms: a long rewrite must not starve the watchdog.
-    wdt_reset();
+    feed_watchdog();
     eeprom_update_byte(reinterpret_cast<uint8_t *>(address), value);
   }
 };
@@ -174,58 +194,73 @@ EepromStorage g_storage;
 alignas(pb::Particle) uint8_t g_particle_memory[sizeof(pb::Particle)];
 pb::Particle *g_particle = nullptr;
 
-// ---- Serial1 (XBee) -------------------------------------------------------------------------
+// ---- Serial1 (XBee): USART1 at 9600 8N1, our own driver ------------------------------------
+// The Arduino core's HardwareSerial (its virtual Print/Stream interface, two 64-byte rings,
+// flush and peek) cost about 880 B of flash that the USB stack needs. This driver does what the
+// particle uses: a receive ring filled by an interrupt, and one frame at a time sent from a
+// linear buffer by the data-register-empty interrupt.
+
+// 8 MHz / (16 * (51 + 1)) = 9615 baud, 0.2 % fast: inside the XBee's tolerance. Normal speed
+// (no U2X) samples each bit 16 times, which tolerates more clock error than double speed.
+const uint8_t kUbrr9600 = 51;
+
+// Two-thirds of a 100-byte RF packet: enough for every burst the loop can fall behind on.
+const uint8_t kRxRingSize = 64;  // a power of two
+static_assert((kRxRingSize & (kRxRingSize - 1)) == 0, "ring index wraps with a mask");
+volatile uint8_t g_rx_ring[kRxRingSize];
+volatile uint8_t g_rx_head = 0;  // written by USART1_RX_vect
+uint8_t g_rx_tail = 0;           // written by the loop; a full ring drops new bytes
+
+// The frame being sent; the particle's own queue holds the ones after it.
+uint8_t g_tx_frame[pb::kMaxPayload + pb::kFrameOverhead];
+volatile uint8_t g_tx_next = 0;  // advanced by USART1_UDRE_vect
+uint8_t g_tx_length = 0;
+
+void serial_begin() {
+  UBRR1 = kUbrr9600;
+  UCSR1A = 0;
+  UCSR1C = _BV(UCSZ11) | _BV(UCSZ10);  // 8 data bits, no parity, 1 stop bit
+  UCSR1B = _BV(RXEN1) | _BV(TXEN1) | _BV(RXCIE1);
+}
 
 void serial_receive(uint32_t now_ms) {
-  int pending = Serial1.available();
-  while (pending-- > 0) {
-    g_particle->on_rx_byte(static_cast<uint8_t>(Serial1.read()), now_ms);
+  while (g_rx_tail != g_rx_head) {
+    const uint8_t byte = g_rx_ring[g_rx_tail];
+    g_rx_tail = static_cast<uint8_t>((g_rx_tail + 1) & (kRxRingSize - 1));
+    g_particle->on_rx_byte(byte, now_ms);
   }
 }
 
-// A transparent XBee sends what its host wrote once RO = 3 character times (3.1 ms at 9600 baud)
-// pass without a byte, or at once at 100 bytes. Frames written back to back (two STATUS frames
-// are 104 B) would be cut apart, and every receiver would get other radios' packets between the
-// pieces. So each frame goes out alone: handed over whole, then the line stays silent from its
-// last stop bit for a gap well beyond RO before the next frame: at least 5 ms, as 6 ticks of the
-// millisecond clock.
-const uint8_t kInterFrameGapMs = 6;
-
+// Each frame goes out as an RF packet of its own: handed to the USART whole, then the line stays
+// silent for Particle::kInterFrameGapMs (longer than the XBee's packetisation timeout).
 enum TxPhase : uint8_t { kTxReady, kTxDraining, kTxGap };
 TxPhase g_tx_phase = kTxReady;
 uint32_t g_tx_gap_from_ms = 0;
 
-// What HardwareSerial::flush() waits for, without the waiting: its buffer is empty (the
-// data-register-empty interrupt is off) and the last stop bit has left (TXC1; write() clears it).
-bool serial1_drained() {
+// The interrupt has handed every byte to the USART (it then turns itself off) and the last stop
+// bit has left the pin (TXC1, cleared when the frame started).
+bool serial_drained() {
   return !(UCSR1B & _BV(UDRIE1)) && (UCSR1A & _BV(TXC1));
 }
 
 void serial_transmit(uint32_t now_ms) {
   if (g_tx_phase == kTxDraining) {
-    if (!serial1_drained()) return;
+    if (!serial_drained()) return;
     g_tx_gap_from_ms = now_ms;
     g_tx_phase = kTxGap;
   }
   if (g_tx_phase == kTxGap) {
-    if (now_ms - g_tx_gap_from_ms < kInterFrameGapMs) return;
+    if (now_ms - g_tx_gap_from_ms < pb::Particle::kInterFrameGapMs) return;
     g_tx_phase = kTxReady;
   }
-  // After the gap the 64-byte buffer is empty, so a whole frame (<= 56 B) fits at once.
-  uint8_t chunk[16];
-  int room = Serial1.availableForWrite();
-  while (room > 0) {
-    const size_t want =
-        room < static_cast<int>(sizeof chunk) ? static_cast<size_t>(room) : sizeof chunk;
-    const size_t got = g_particle->take_tx(chunk, want);
-    if (got == 0) return;
-    Serial1.write(chunk, got);
-    room -= static_cast<int>(got);
-    if (!g_particle->tx_frame_open()) {
-      g_tx_phase = kTxDraining;
-      return;
-    }
-  }
+  // take_tx() stops at the end of the frame at the head of the queue, and a frame fits.
+  const size_t length = g_particle->take_tx(g_tx_frame, sizeof g_tx_frame);
+  if (length == 0) return;
+  g_tx_length = static_cast<uint8_t>(length);
+  g_tx_next = 0;
+  UCSR1A = _BV(TXC1);  // writing one clears the flag
+  UCSR1B |= _BV(UDRIE1);
+  g_tx_phase = kTxDraining;
 }
 
 void adc_poll() {
@@ -270,6 +305,22 @@ ISR(TIMER1_COMPB_vect) {
   PORTB &= ~_BV(PORTB5);
 }
 
+ISR(USART1_RX_vect) {
+  const uint8_t byte = UDR1;  // read even when the ring is full, to clear the interrupt
+  const uint8_t head = g_rx_head;
+  const uint8_t next = static_cast<uint8_t>((head + 1) & (kRxRingSize - 1));
+  if (next == g_rx_tail) return;  // full: the parser resynchronises on what follows
+  g_rx_ring[head] = byte;
+  g_rx_head = next;
+}
+
+ISR(USART1_UDRE_vect) {
+  const uint8_t next = g_tx_next;
+  UDR1 = g_tx_frame[next];
+  g_tx_next = static_cast<uint8_t>(next + 1);
+  if (next + 1 >= g_tx_length) UCSR1B &= ~_BV(UDRIE1);
+}
+
 void setup() {
   const uint8_t reset_flags = g_reset_flags;
 #ifdef PARTICLE_FAULT_INJECTION
@@ -277,14 +328,14 @@ void setup() {
 #endif
   const uint32_t seed = seed_from_noise();
   g_particle = new (g_particle_memory) pb::Particle(g_storage, reset_flags, seed);
-  Serial1.begin(9600);
+  serial_begin();
   g_particle->begin(0);  // the clock starts with the servo's frames
   servo_begin(g_particle->servo_pulse_us());
-  wdt_enable(WDTO_250MS);
+  wdt_enable(kParticleWatchdogPeriod);
 }
 
 void loop() {
-  wdt_reset();
+  feed_watchdog();
 #ifdef PARTICLE_FAULT_INJECTION
   fault_check();
 #endif
@@ -299,13 +350,26 @@ void loop() {
   serial_transmit(now_ms);
 }
 
-#ifdef PARTICLE_NO_USB
-// Replaces the Arduino core's main(), which attaches the USB CDC port: without that call the USB
-// stack is not linked at all (about 2.9 KB of flash and 140 B of RAM). Uploading then needs a
-// press of the reset button, after which the Caterina bootloader waits 8 s for avrdude.
+// Replaces the Arduino core's main() and its init(), which sets up four timers for analogWrite()
+// and millis() that the particle does not use (Timer1 is the servo's and the clock's).
 int main() {
-  init();
+#ifdef PARTICLE_NO_USB
+  // Without the USB stack nothing needs Timer0: the clock is Timer1, so no millis() interrupt
+  // delays a servo edge.
+#else
+  // The USB code waits with the core's delay(), which counts Timer0 overflows (clk/64, as the
+  // core's init() sets it up).
+  TCCR0A = _BV(WGM01) | _BV(WGM00);
+  TCCR0B = _BV(CS01) | _BV(CS00);
+  TIMSK0 = _BV(TOIE0);
+#endif
+  ADCSRA = _BV(ADEN) | _BV(ADPS2) | _BV(ADPS1);  // clk/64: 125 kHz at 8 MHz
+  sei();
+#ifndef PARTICLE_NO_USB
+  // The USB CDC port: a host that opens it at 1200 baud and closes it resets the particle into
+  // the Caterina bootloader, so uploads need no button (see bootloader_touch_pending()).
+  USBDevice.attach();
+#endif
   setup();
   for (;;) loop();
 }
-#endif

@@ -102,8 +102,10 @@ def test_set_param_reports_unknown_out_of_range_and_busy(bench: Bench) -> None:
     )
     busy = bench.set_param(Param.CYCLE_STEPS, 20)
     assert (busy.result, busy.value) == (ParamResult.BUSY, 10)
-    non_monotonic = Bench().set_param(Param.SERVO_CAL_4, PARAM_SPECS[Param.SERVO_CAL_8].default + 1)
-    assert non_monotonic.result == ParamResult.OUT_OF_RANGE
+    non_monotonic = Bench().set_param(Param.SERVO_CAL_3, 2000)  # inside its 500..2500
+    assert non_monotonic.result == ParamResult.SERVO_TABLE_NOT_MONOTONIC
+    crossed = Bench().set_param(Param.RADIUS_MIN_UM, PARAM_SPECS[Param.RADIUS_MAX_UM].default)
+    assert crossed.result == ParamResult.RADIUS_MIN_NOT_BELOW_MAX
 
 
 def test_set_id_renames_only_the_addressed_particle_and_it_answers_from_the_new_id(

@@ -16,6 +16,7 @@ from particlebot.protocol import (
     Param,
     ParamResult,
     Ping,
+    ServoHold,
     Start,
     State,
     Status,
@@ -147,6 +148,10 @@ def drive_to(bench: Bench, state: State) -> int:
         bench.send(Identify(target=BROADCAST_ID))
         bench.advance(300)
         return 150
+    if state is State.HOLDING:
+        bench.send(ServoHold(target=bench.particle.id, pulse_us=1900, hold_s=30))
+        bench.advance(100)
+        return 150
     if state is State.DONE:
         bench.set_param(Param.ROUND_MS, 200)
         start(bench, cycle_steps=10, update_interval_s=1, phototaxis=1)
@@ -185,8 +190,10 @@ def test_stop_in_every_state_contracts_smoothly_within_a_second(bench: Bench, st
     stop_at = bench.now
     before = bench.particle.radius_um
     bench.send(Stop())
-    # At once, before the next tick; an idle particle has nothing to stop and stays IDLE.
-    assert bench.status().state == (State.IDLE if state is State.IDLE else State.STOPPING)
+    # At once, before the next tick; an idle particle has nothing to stop and stays IDLE, and one
+    # holding its servo lets go and is IDLE (the servo returns straight to the contracted pulse).
+    at_rest = state in (State.IDLE, State.HOLDING)
+    assert bench.status().state == (State.IDLE if at_rest else State.STOPPING)
     trace = radii(bench, 1000)
     if before > R_MIN:
         assert trace[stop_at + STEP_MS] < before  # moving down within one servo step

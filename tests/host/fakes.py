@@ -145,6 +145,7 @@ def status_message(**fields: int | tuple[int, ...]) -> Status:
         "rx_skipped_bytes": 0,
         "resets": 1,
         "last_reset_cause": 1,
+        "servo_pulse_us": 1000,
     }
     values.update(fields)
     return Status(**values)  # type: ignore[arg-type]

@@ -376,6 +376,12 @@ def test_param_values_are_shown_as_notes(model: ConsoleModel, clock: ManualClock
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(ParamResult.BUSY), value=150)
     hear(model, clock, encode_frame(reply, 3, 0))
     assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (BUSY)"
+    # A value inside the range that would make the servo table non-monotonic says so.
+    refused = ParamValue(
+        param=int(Param.SERVO_CAL_3), result=int(ParamResult.SERVO_TABLE_NOT_MONOTONIC), value=1285
+    )
+    hear(model, clock, encode_frame(refused, 3, 1))
+    assert model.notes[-1].text == "Particle 3: SERVO_CAL_3 = 1285 (SERVO_TABLE_NOT_MONOTONIC)"
 
 
 def test_commands_become_the_right_messages(model: ConsoleModel, sink: Sink) -> None:

@@ -22,7 +22,7 @@ from particlebot.sim import BASE, CPU_HZ, BaseStation, EmulatedSwarm, SwarmConfi
 pytestmark = pytest.mark.usefixtures("built_images")
 
 SLOT_S = 0.060
-"""A broadcast PING is answered in a random one of these slots (a STATUS takes 54 ms at 9600)."""
+"""A broadcast PING is answered in a random one of these slots (a STATUS takes 56 ms at 9600)."""
 SLOTS_WITHOUT_GROUP = 10
 # Periodic STATUS frames would mix with the answers being timed: push them out of the way.
 QUIET = {Param.STATUS_PERIOD_MS: 60000}

@@ -50,7 +50,7 @@ def particle() -> Iterator[ParticleSim]:
 
 def load(sim: ParticleSim, rng: random.Random, seconds: float) -> None:
     """Runs `seconds` while keeping the radio busy both ways: every 50 ms a PING to this particle
-    (a 52-byte STATUS goes back), another particle's INTENSITY and some garbage come in."""
+    (a 54-byte STATUS goes back), another particle's INTENSITY and some garbage come in."""
     end = sim.cycle + round(seconds * CPU_HZ)
     seq = 0
     while sim.cycle < end:

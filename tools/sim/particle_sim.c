@@ -21,6 +21,8 @@
 //   pin PB LEVEL   drive input pin PB (port letter and bit, e.g. D1 = D2, the fault pin of the
 //                  fault-injection build) to LEVEL 0 or 1; kept across resets
 //   eeprom         answered by `eeprom HEX` (the whole 1024 bytes)
+//   usb-touch      what the core's USB code does on a 1200-baud touch: bootloader key at 0x0800,
+//                  watchdog set to 120 ms (simavr has no USB)
 //   quit           writes --eeprom-out if given, answers `bye C` and exits
 // Events (in simulated-time order, before the `at` that ends the run they happened in)
 //   hello particle_sim 1 F       once at start; F is the clock in Hz
@@ -53,6 +55,8 @@
 #define EEPROM_SIZE 1024u
 #define MCUSR_DATA_ADDR 0x54u  // MCUSR: I/O 0x34 + 0x20
 #define MCUSR_PORF 0x01u
+#define WDTCSR_DATA_ADDR 0x60u
+#define USB_BOOT_KEY_ADDR 0x0800u
 #define RX_QUEUE_SIZE 4096u
 #define SENSOR_COUNT 6
 #define DRIVEN_PINS_MAX 8
@@ -315,6 +319,28 @@ static bool save_eeprom_file(const char *path) {
   return fclose(file) == 0;
 }
 
+// Writes an I/O register as an instruction would, through the module that owns it.
+static void io_write(uint16_t address, uint8_t value) {
+  avr_t *avr = sim.avr;
+  const int io = AVR_DATA_TO_IO(address);
+  if (avr->io[io].w.c) {
+    avr->io[io].w.c(avr, address, value, avr->io[io].w.param);
+  } else {
+    avr->data[address] = value;
+  }
+}
+
+// What the Arduino core's USB CDC code does when a host that opened the port at 1200 baud drops
+// DTR (the "1200-baud touch" before an upload): it stores the Caterina bootloader's key 0x7777 at
+// 0x0800 and sets the watchdog to 120 ms (WDCE|WDE, then WDE|WDP1|WDP0 within four cycles),
+// expecting it to reset the chip into the bootloader. simavr has no USB, so this stands in for it.
+static void usb_touch(void) {
+  sim.avr->data[USB_BOOT_KEY_ADDR] = 0x77;
+  sim.avr->data[USB_BOOT_KEY_ADDR + 1] = 0x77;
+  io_write(WDTCSR_DATA_ADDR, 0x18);
+  io_write(WDTCSR_DATA_ADDR, 0x0B);
+}
+
 static void dump_eeprom(void) {
   uint8_t bytes[EEPROM_SIZE];
   char hex[2 * EEPROM_SIZE + 1];
@@ -358,6 +384,8 @@ static bool command(char *line, const char *eeprom_out) {
     set_pin(arg[0], arg[1] - '0', (int)a);
   } else if (strcmp(verb, "eeprom") == 0) {
     dump_eeprom();
+  } else if (strcmp(verb, "usb-touch") == 0) {
+    usb_touch();
   } else if (strcmp(verb, "quit") == 0) {
     if (eeprom_out) save_eeprom_file(eeprom_out);
     emit("bye %" PRIu64, (uint64_t)now());

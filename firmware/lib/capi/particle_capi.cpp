@@ -7,8 +7,11 @@
 
 #include "estimation.h"
 #include "frame.h"
+#include "light_sampler.h"
 #include "particle.h"
 #include "protocol_gen.h"
+
+static_assert(PB_MAX_FRAME == pb::kMaxPayload + pb::kFrameOverhead, "frame size in the C API");
 
 namespace {
 
@@ -93,15 +96,11 @@ void pb_particle_tick(pb_particle *particle, uint32_t now_ms) {
 }
 
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity) {
-  // take_tx() stops at each frame's end; the PC side gets as many frames as fit, since the
-  // virtual air times and packetises the bytes itself.
-  size_t n = 0;
-  while (n < capacity) {
-    const size_t got = particle->particle.take_tx(out + n, capacity - n);
-    if (got == 0) break;
-    n += got;
-  }
-  return n;
+  return particle->particle.take_tx(out, capacity);
+}
+
+uint8_t pb_inter_frame_gap_ms(void) {
+  return pb::Particle::kInterFrameGapMs;
 }
 
 uint8_t pb_particle_id(const pb_particle *particle) {
@@ -132,6 +131,10 @@ size_t pb_particle_eeprom(const pb_particle *particle, uint8_t *out, size_t capa
 
 uint32_t pb_definition_hash(void) {
   return pb::kDefinitionHash;
+}
+
+uint16_t pb_calibrated_reading(uint16_t raw, uint16_t gamma_milli, uint16_t gain_milli) {
+  return pb::calibrated_reading(raw, pb::sensor_calibration(gamma_milli, gain_milli));
 }
 
 uint8_t pb_estimate(uint8_t method, uint16_t own_intensity, const uint16_t *others,

@@ -14,6 +14,8 @@ extern "C" {
 
 #define PB_SENSOR_COUNT 6
 #define PB_EEPROM_SIZE 1024
+// The longest frame: max_payload + 8 bytes of sync, header and CRC.
+#define PB_MAX_FRAME 56
 
 typedef struct pb_particle pb_particle;
 
@@ -38,8 +40,16 @@ void pb_particle_receive(pb_particle *particle, const uint8_t *bytes, size_t cou
 // simulated time for servo steps to fall on their 20 ms boundaries.
 void pb_particle_tick(pb_particle *particle, uint32_t now_ms);
 
-// Moves up to capacity bytes queued for Serial1 into out; returns how many.
+// Moves up to capacity bytes of the frame at the head of the Serial1 queue into out and returns
+// how many; it never goes past that frame's end, so a call with room for a whole frame
+// (PB_MAX_FRAME) takes exactly one frame, as main.cpp hands one frame at a time to Serial1.
+// Call again for the next frame; 0 when the queue is empty.
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity);
+
+// The silence main.cpp keeps on Serial1 after a frame's last byte before it hands over the next
+// (Particle::kInterFrameGapMs): a simulation of the serial link must keep it too, or the XBee
+// would put two frames into one RF packet and cut a pair over 100 bytes apart.
+uint8_t pb_inter_frame_gap_ms(void);
 
 uint8_t pb_particle_id(const pb_particle *particle);
 uint16_t pb_particle_servo_pulse_us(const pb_particle *particle);
@@ -54,6 +64,10 @@ size_t pb_particle_eeprom(const pb_particle *particle, uint8_t *out, size_t capa
 // ---- pure functions, for property tests ------------------------------------------------------
 
 uint32_t pb_definition_hash(void);
+
+// A photocell's raw reading (0..1023) as the particle corrects it before averaging, for the
+// calibration parameters SENSOR_GAMMA_k = gamma_milli and SENSOR_GAIN_k = gain_milli.
+uint16_t pb_calibrated_reading(uint16_t raw, uint16_t gamma_milli, uint16_t gain_milli);
 
 // S_n of a particle reading own_intensity when the others read others[0..others_count) in its
 // estimation round. method is the protocol's method enum; the rest are the parameters of the

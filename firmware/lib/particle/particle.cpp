@@ -4,38 +4,9 @@
 namespace pb {
 
 Particle::Particle(Storage &storage, uint8_t reset_cause, uint32_t rng_seed)
-    : settings_(storage),
-      rng_(rng_seed),
-      coordinator_(rng_),
-      now_ms_(0),
-      boot_ms_(0),
-      last_rx_ms_(0),
-      next_status_ms_(0),
-      ping_reply_ms_(0),
-      param_reply_ms_(0),
-      param_reply_value_(0),
-      radius_um_(0),
-      pulse_us_(0),
-      servo_start_ms_(0),
-      servo_step_(0),
-      servo_kind_(0xFF),
-      round_intensity_(0),
-      record_round_(0),
-      tx_dropped_(0),
-      tx_head_(0),
-      tx_count_(0),
-      tx_frame_left_(0),
-      record_run_(0),
-      seq_(0),
-      reset_cause_(reset_cause),
-      rx_idle_pending_(false),
-      ping_reply_pending_(false),
-      param_reply_pending_(false),
-      param_reply_param_(0),
-      param_reply_result_(0),
-      readings_awaited_(0) {
-  geometry_.r_min_um = 0;
-  geometry_.r_max_um = 0;
+    : ParticleState(), settings_(storage), rng_(rng_seed), coordinator_(rng_) {
+  servo_kind_ = 0xFF;  // no motion evaluated yet
+  reset_cause_ = reset_cause;
 }
 
 void Particle::begin(uint32_t now_ms) {
@@ -43,7 +14,7 @@ void Particle::begin(uint32_t now_ms) {
   boot_ms_ = now_ms;
   settings_.load();
   settings_.record_reset(reset_cause_);
-  refresh_geometry();
+  refresh_from_settings();
   update_servo(now_ms, true);
   // The first STATUS announces the particle; spreading it over one period keeps a swarm powered
   // up together from answering all at once.
@@ -65,6 +36,7 @@ void Particle::on_rx_byte(uint8_t byte, uint32_t now_ms) {
 
 void Particle::tick(uint32_t now_ms, uint32_t servo_ms) {
   now_ms_ = now_ms;
+  if (hold_pulse_us_ != 0 && time_reached(now_ms, hold_until_ms_)) end_hold();
   if (rx_idle_pending_ && time_reached(now_ms, last_rx_ms_ + kFrameTimeoutMs)) {
     rx_idle_pending_ = false;
     while (parser_.timeout()) handle_frame(parser_.frame(), now_ms);
@@ -109,7 +81,7 @@ size_t Particle::take_tx(uint8_t *out, size_t capacity) {
 
 uint8_t Particle::status_payload(uint8_t *out) const {
   StatusMessage m;
-  m.state = static_cast<uint8_t>(coordinator_.state());
+  m.state = static_cast<uint8_t>(state());
   m.method = coordinator_.method();
   m.run_id = coordinator_.run_id();
   m.s_n = coordinator_.s_n();
@@ -128,6 +100,7 @@ uint8_t Particle::status_payload(uint8_t *out) const {
   m.rx_skipped_bytes = c.skipped_bytes;
   m.resets = settings_.resets();
   m.last_reset_cause = settings_.last_reset_cause();
+  m.servo_pulse_us = servo_pulse_us();
   return m.encode(out);
 }
 
@@ -158,6 +131,7 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
     case MessageType::STOP: {
       StopMessage m;
       if (m.decode(frame.payload, frame.length)) {
+        end_hold();
         coordinator_.stop(now_ms, radius_at(now_ms), geometry_);
         update_servo(now_ms);
       }
@@ -192,8 +166,19 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
     case MessageType::IDENTIFY: {
       IdentifyMessage m;
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
+        end_hold();
         coordinator_.identify(now_ms);
         answer_with_status(m.target, now_ms);
+      }
+      break;
+    }
+    case MessageType::SERVO_HOLD: {
+      ServoHoldMessage m;
+      // Addressed to one particle only (an id is never the broadcast id); answered at once, so
+      // the console sees whether the hold took effect.
+      if (m.decode(frame.payload, frame.length) && m.target == settings_.id()) {
+        handle_servo_hold(m, now_ms);
+        send_status();
       }
       break;
     }
@@ -202,8 +187,13 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
       // Never by broadcast: every particle would take the same id.
       if (m.decode(frame.payload, frame.length) && m.target == settings_.id() &&
           m.target != kBroadcastId) {
-        settings_.set_id(m.new_id);
-        send_status();
+        if (settings_.set_id(m.new_id)) {
+          send_status();  // from the new id
+        } else {
+          // 0, 254 and 255 are no particle's id: the particle keeps its own, and its STATUS,
+          // from that id, tells the console the rename did not happen.
+          send_status();
+        }
       }
       break;
     }
@@ -215,6 +205,7 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
 void Particle::handle_start(const StartMessage &m, uint32_t now_ms) {
   // The console may resend START to reach every particle; only a new run restarts.
   if (coordinator_.running() && coordinator_.run_id() == m.run_id) return;
+  end_hold();
   RunConfig c;
   c.run_id = m.run_id;
   c.method = m.method <= static_cast<uint8_t>(Method::COUNTING)
@@ -251,7 +242,7 @@ ParamResult Particle::apply_param(uint8_t param, int32_t value, int32_t *in_forc
   if (s != State::IDLE && s != State::DONE) return ParamResult::BUSY;
   const ParamResult result = settings_.set(param, value);
   if (result == ParamResult::OK) *in_force = value;
-  refresh_geometry();
+  refresh_from_settings();
   update_servo(now_ms_, true);
   return result;
 }
@@ -302,9 +293,30 @@ void Particle::finish_round() {
 
 // ---- servo -------------------------------------------------------------------------------------
 
-void Particle::refresh_geometry() {
+void Particle::refresh_from_settings() {
   geometry_.r_min_um = static_cast<uint32_t>(settings_.get(Param::RADIUS_MIN_UM));
   geometry_.r_max_um = static_cast<uint32_t>(settings_.get(Param::RADIUS_MAX_UM));
+  const uint8_t gamma0 = static_cast<uint8_t>(Param::SENSOR_GAMMA_0);
+  const uint8_t gain0 = static_cast<uint8_t>(Param::SENSOR_GAIN_0);
+  for (uint8_t k = 0; k < kSensorCount; ++k) {
+    sampler_.set_calibration(k,
+                             static_cast<uint16_t>(settings_.get(static_cast<Param>(gamma0 + k))),
+                             static_cast<uint16_t>(settings_.get(static_cast<Param>(gain0 + k))));
+  }
+}
+
+void Particle::handle_servo_hold(const ServoHoldMessage &m, uint32_t now_ms) {
+  // Only at rest: a running particle's servo belongs to the wave. A request that cannot be
+  // held (a pulse out of range, hold_s = 0) ends any hold instead: the safe side.
+  const State s = coordinator_.state();
+  const bool resting = s == State::IDLE || s == State::DONE;
+  if (!resting || m.hold_s == 0 || m.pulse_us < kServoPulseMinUs || m.pulse_us > kServoPulseMaxUs) {
+    end_hold();
+    return;
+  }
+  const uint8_t seconds = m.hold_s < kMaxHoldS ? m.hold_s : kMaxHoldS;
+  hold_pulse_us_ = m.pulse_us;
+  hold_until_ms_ = now_ms + seconds * 1000UL;
 }
 
 uint32_t Particle::radius_at(uint32_t now_ms) const {

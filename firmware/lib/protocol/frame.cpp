@@ -64,64 +64,18 @@ size_t encode_frame(uint8_t type, uint8_t sender, uint8_t seq, const uint8_t *pa
 }
 
 FrameParser::FrameParser()
-    : frame_(),
-      crc_spill_(),
-      counters_(),
-      state_(kHunting),
-      fill_(0),
-      queue_read_(0),
-      queue_end_(0) {}
+    : frame_(), counters_(), state_(kHunting), fill_(0), queue_read_(0), queue_end_(0) {}
 
-uint8_t FrameParser::body(uint8_t index) const {
-  switch (index) {
-    case 0:
-      return frame_.length;
-    case 1:
-      return frame_.type;
-    case 2:
-      return frame_.sender;
-    case 3:
-      return frame_.seq;
-    default:
-      break;
-  }
-  if (index < kHeaderBytes + kMaxPayload) return frame_.payload[index - kHeaderBytes];
-  if (index < kBodyCapacity) return crc_spill_[index - kHeaderBytes - kMaxPayload];
-  return 0;
-}
-
-void FrameParser::set_body(uint8_t index, uint8_t value) {
-  switch (index) {
-    case 0:
-      frame_.length = value;
-      return;
-    case 1:
-      frame_.type = value;
-      return;
-    case 2:
-      frame_.sender = value;
-      return;
-    case 3:
-      frame_.seq = value;
-      return;
-    default:
-      break;
-  }
-  if (index < kHeaderBytes + kMaxPayload) {
-    frame_.payload[index - kHeaderBytes] = value;
-  } else if (index < kBodyCapacity) {
-    crc_spill_[index - kHeaderBytes - kMaxPayload] = value;
-  }
-}
+// The parser stores a frame's body (LEN .. CRC) in a Frame, byte after byte.
+static_assert(sizeof(Frame) == kMaxPayload + 6, "Frame holds a whole frame body");
+static_assert(offsetof(Frame, payload) == 4, "LEN TYPE SENDER SEQ, then the payload");
 
 // Moves the bytes still queued down to just behind the candidate's fill_ bytes; returns the
 // index past the last one.
 uint8_t FrameParser::pack_queue() {
   uint8_t end = fill_;
-  for (uint8_t i = queue_read_; i < queue_end_; ++i) {
-    set_body(end, body(i));
-    ++end;
-  }
+  uint8_t *bytes = body();
+  for (uint8_t i = queue_read_; i < queue_end_; ++i) bytes[end++] = bytes[i];
   return end;
 }
 
@@ -161,8 +115,7 @@ bool FrameParser::step(uint8_t byte) {
     requeue();
     return false;
   }
-  set_body(fill_, byte);
-  ++fill_;
+  body()[fill_++] = byte;
   if (fill_ == 1) {
     if (byte > kMaxPayload) {
       bump(counters_.bad_length);
@@ -172,11 +125,11 @@ bool FrameParser::step(uint8_t byte) {
   }
   const uint8_t length = frame_.length;
   if (fill_ < length + kHeaderBytes + kCrcBytes) return false;
-  uint16_t crc = 0xFFFF;
-  for (uint8_t i = 0; i < length + kHeaderBytes; ++i) crc = crc16_update(crc, body(i));
+  const uint8_t *bytes = body();
+  const uint16_t crc = crc16(bytes, length + kHeaderBytes);
   const uint16_t received = static_cast<uint16_t>(
-      body(length + kHeaderBytes) |
-      static_cast<uint16_t>(static_cast<uint16_t>(body(length + kHeaderBytes + 1)) << 8));
+      bytes[length + kHeaderBytes] |
+      static_cast<uint16_t>(static_cast<uint16_t>(bytes[length + kHeaderBytes + 1]) << 8));
   if (crc != received) {
     bump(counters_.bad_crc);
     requeue();
@@ -190,8 +143,7 @@ bool FrameParser::step(uint8_t byte) {
 
 bool FrameParser::drain() {
   while (queue_read_ < queue_end_) {
-    const uint8_t byte = body(queue_read_);
-    ++queue_read_;
+    const uint8_t byte = body()[queue_read_++];
     if (step(byte)) return true;
   }
   queue_read_ = 0;
@@ -209,8 +161,7 @@ bool FrameParser::push(uint8_t byte) {
   uint8_t end = pack_queue();
   queue_read_ = fill_;
   if (end < kBodyCapacity) {
-    set_body(end, byte);
-    ++end;
+    body()[end++] = byte;
   } else {
     bump(counters_.skipped_bytes);  // unreachable: a found frame freed at least 8 bytes
   }

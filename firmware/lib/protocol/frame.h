@@ -10,7 +10,7 @@
 #include <stdint.h>
 
 // The generated header must come from the generator version this codec was written against.
-#define PB_PROTOCOL_EXPECTED_GENERATOR_VERSION 1
+#define PB_PROTOCOL_EXPECTED_GENERATOR_VERSION 2
 #include "protocol_gen.h"
 #if PB_PROTOCOL_GENERATOR_VERSION != PB_PROTOCOL_EXPECTED_GENERATOR_VERSION
 #error "Regenerate protocol_gen.h with tools/gen_protocol.py (make generate)"
@@ -32,12 +32,15 @@ size_t encode_frame(uint8_t type, uint8_t sender, uint8_t seq, const uint8_t *pa
                     uint8_t *out, size_t capacity);
 
 // One frame that passed the CRC check. Unknown types are frames too: the consumer ignores them.
+// The fields are in the order the bytes after the sync marker arrive (LEN TYPE SENDER SEQ
+// PAYLOAD CRC), so that the parser collects a frame in place; the two bytes after the longest
+// payload hold that frame's CRC while it is checked.
 struct Frame {
+  uint8_t length;  // payload bytes, <= kMaxPayload
   uint8_t type;
   uint8_t sender;
   uint8_t seq;
-  uint8_t length;  // payload bytes, <= kMaxPayload
-  uint8_t payload[kMaxPayload];
+  uint8_t payload[kMaxPayload + 2];
 };
 
 // Every counter saturates at 65535. Each received byte ends up in exactly one place: in an
@@ -60,32 +63,29 @@ class FrameParser {
 
   // Feeds one received byte. Returns true when a valid frame is complete: read it with frame()
   // before the next push() or timeout(), which reuse its storage.
-  bool push(uint8_t byte);
+  PB_MUST_USE bool push(uint8_t byte);
 
   // The owner calls this after >= kFrameTimeoutMs without a byte: a partial frame is dropped as
   // truncated (bad_length) and its bytes are rescanned. Returns true when that rescan completes a
   // frame hidden in them (read it with frame()); call timeout() again until it returns false to
   // finish the rescan. Harmless when nothing is pending.
-  bool timeout();
+  PB_MUST_USE bool timeout();
 
   const Frame &frame() const { return frame_; }
   const ParserCounters &counters() const { return counters_; }
 
  private:
-  // Bytes after the sync marker (LEN TYPE SENDER SEQ PAYLOAD CRC) live in frame_ so that a valid
-  // frame needs no copy: index 0 is length, 1..3 type/sender/seq, 4.. the payload, and the last
-  // two indexes (the CRC of a full-size frame) spill into crc_spill_.
+  // Bytes after the sync marker (LEN TYPE SENDER SEQ PAYLOAD CRC) live in frame_, whose fields
+  // are laid out in that order, so that a valid frame needs no copy.
   static const uint8_t kBodyCapacity = kMaxPayload + 6;
 
-  uint8_t body(uint8_t index) const;
-  void set_body(uint8_t index, uint8_t value);
+  uint8_t *body() { return reinterpret_cast<uint8_t *>(&frame_); }
   bool step(uint8_t byte);
   bool drain();
   uint8_t pack_queue();
   void requeue();
 
   Frame frame_;
-  uint8_t crc_spill_[2];
   ParserCounters counters_;
   uint8_t state_;       // hunting, saw SYNC0, or collecting the body
   uint8_t fill_;        // body bytes collected

@@ -1,12 +1,17 @@
 // Radio protocol of the particles: constants, enums and message structs with their encoders.
 // Generated from shared/protocol.toml by tools/gen_protocol.py; do not edit.
-// Definition hash 0xDCF5A94F (kDefinitionHash, sent in every STATUS).
+// Definition hash 0xF1AAC96B (kDefinitionHash, sent in every STATUS).
 #ifndef PARTICLEBOT_PROTOCOL_GEN_H
 #define PARTICLEBOT_PROTOCOL_GEN_H
 
 #include <stdint.h>
+#include <string.h>
 
-#define PB_PROTOCOL_GENERATOR_VERSION 1
+#ifdef __AVR__
+#include <avr/pgmspace.h>
+#endif
+
+#define PB_PROTOCOL_GENERATOR_VERSION 2
 // Hand-written code that relies on this header's shape defines the generator version it was
 // written against (frame.h does); a header from another generator stops the build here.
 #if defined(PB_PROTOCOL_EXPECTED_GENERATOR_VERSION) && \
@@ -14,9 +19,15 @@
 #error "Regenerate this file with tools/gen_protocol.py (make generate)"
 #endif
 
+// A function whose bool result must not be dropped (a failed decode or lookup, a refused
+// change). GCC warns even when the result is cast to void: test it.
+#ifndef PB_MUST_USE
+#define PB_MUST_USE __attribute__((warn_unused_result))
+#endif
+
 namespace pb {
 
-const uint32_t kDefinitionHash = 0xDCF5A94FUL;
+const uint32_t kDefinitionHash = 0xF1AAC96BUL;
 const uint8_t kSync0 = 0xA5;
 const uint8_t kSync1 = 0x5A;
 // Payload bytes at most; LEN counts payload bytes only.
@@ -46,6 +57,9 @@ enum class State : uint8_t {
   DONE = 6,
   // Wiggling so a person can see which particle this is.
   IDENTIFYING = 7,
+  // Holding the servo at the pulse a SERVO_HOLD asked for (servo calibration), until its time runs
+  // out, STOP, START or IDENTIFY.
+  HOLDING = 8,
 };
 
 // Position-estimation method of SI section S4.
@@ -91,6 +105,31 @@ enum class Param : uint8_t {
   RADIUS_MIN_UM = 13,
   // Fully expanded radius in micrometres (R_min + Delta R).
   RADIUS_MAX_UM = 14,
+  // Photocell A0's gamma (eq. 7) in thousandths; 1000 means gamma = 1, the law eq. 14 assumes.
+  SENSOR_GAMMA_0 = 16,
+  // Photocell A1's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_1 = 17,
+  // Photocell A2's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_2 = 18,
+  // Photocell A3's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_3 = 19,
+  // Photocell A4's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_4 = 20,
+  // Photocell A5's gamma (eq. 7) in thousandths.
+  SENSOR_GAMMA_5 = 21,
+  // Photocell A0's gain in thousandths: the factor on its gamma-corrected resistance ratio; 1000
+  // leaves it.
+  SENSOR_GAIN_0 = 22,
+  // Photocell A1's gain in thousandths.
+  SENSOR_GAIN_1 = 23,
+  // Photocell A2's gain in thousandths.
+  SENSOR_GAIN_2 = 24,
+  // Photocell A3's gain in thousandths.
+  SENSOR_GAIN_3 = 25,
+  // Photocell A4's gain in thousandths.
+  SENSOR_GAIN_4 = 26,
+  // Photocell A5's gain in thousandths.
+  SENSOR_GAIN_5 = 27,
   // Servo pulse (us) at calibration point 0 of 9 (R_min).
   SERVO_CAL_0 = 32,
   // Servo pulse (us) at calibration point 1 of 9.
@@ -117,10 +156,15 @@ enum class ParamResult : uint8_t {
   OK = 0,
   // No parameter has that number.
   UNKNOWN_PARAM = 1,
-  // Value outside the parameter's min..max, or it would make the servo table non-monotonic.
+  // Value outside the parameter's min..max.
   OUT_OF_RANGE = 2,
   // Refused while running; STOP first.
   BUSY = 3,
+  // Inside min..max, but the nine SERVO_CAL pulses would no longer rise (or fall) from point 0 to
+  // point 8: change the neighbouring points first.
+  SERVO_TABLE_NOT_MONOTONIC = 4,
+  // Inside min..max, but RADIUS_MIN_UM would no longer be below RADIUS_MAX_UM.
+  RADIUS_MIN_NOT_BELOW_MAX = 5,
 };
 
 // Message types, the TYPE byte of a frame.
@@ -132,6 +176,7 @@ enum class MessageType : uint8_t {
   PING = 0x05,
   IDENTIFY = 0x06,
   SET_ID = 0x07,
+  SERVO_HOLD = 0x08,
   STATUS = 0x20,
   INTENSITY = 0x21,
   PARAM_VALUE = 0x22,
@@ -144,76 +189,113 @@ struct ParamSpec {
   int32_t max;
 };
 
-const uint8_t kParamCount = 23;
+const uint8_t kParamCount = 35;
 
+// The parameter table lives in flash on the AVR (read through avr/pgmspace.h): 13 bytes a
+// parameter, where a switch statement took about 37.
 namespace detail {
-inline bool set_param_spec(ParamSpec *out, int32_t default_value, int32_t min, int32_t max) {
-  if (out != 0) {
-    out->default_value = default_value;
-    out->min = min;
-    out->max = max;
-  }
-  return true;
-}
+struct ParamEntry {
+  uint8_t id;
+  ParamSpec spec;
+};
+#ifdef __AVR__
+#define PB_PROTOCOL_FLASH PROGMEM
+#else
+#define PB_PROTOCOL_FLASH
+#endif
+const ParamEntry kParams[kParamCount] PB_PROTOCOL_FLASH = {
+    // CYCLE_STEPS
+    {1, {150, 10, 3000}},
+    // WAVE_SIZE
+    {2, {5, 1, 64}},
+    // UPDATE_INTERVAL_S
+    {3, {180, 10, 3600}},
+    // METHOD
+    {4, {3, 0, 3}},
+    // REF_DISTANCE_MM
+    {5, {280, 10, 10000}},
+    // REF_VALUE
+    {6, {980, 1, 1022}},
+    // DIAMETER_MM
+    {7, {155, 10, 1000}},
+    // COUNT_TOLERANCE
+    {8, {10, 0, 200}},
+    // BROADCAST_REPEATS
+    {9, {5, 1, 20}},
+    // GROUPS
+    {10, {0, 0, 64}},
+    // ROUND_MS
+    {11, {3000, 200, 60000L}},
+    // STATUS_PERIOD_MS
+    {12, {2000, 200, 60000L}},
+    // RADIUS_MIN_UM
+    {13, {77500L, 50000L, 150000L}},
+    // RADIUS_MAX_UM
+    {14, {117500L, 50000L, 150000L}},
+    // SENSOR_GAMMA_0
+    {16, {1000, 250, 4000}},
+    // SENSOR_GAMMA_1
+    {17, {1000, 250, 4000}},
+    // SENSOR_GAMMA_2
+    {18, {1000, 250, 4000}},
+    // SENSOR_GAMMA_3
+    {19, {1000, 250, 4000}},
+    // SENSOR_GAMMA_4
+    {20, {1000, 250, 4000}},
+    // SENSOR_GAMMA_5
+    {21, {1000, 250, 4000}},
+    // SENSOR_GAIN_0
+    {22, {1000, 100, 10000}},
+    // SENSOR_GAIN_1
+    {23, {1000, 100, 10000}},
+    // SENSOR_GAIN_2
+    {24, {1000, 100, 10000}},
+    // SENSOR_GAIN_3
+    {25, {1000, 100, 10000}},
+    // SENSOR_GAIN_4
+    {26, {1000, 100, 10000}},
+    // SENSOR_GAIN_5
+    {27, {1000, 100, 10000}},
+    // SERVO_CAL_0
+    {32, {1000, 500, 2500}},
+    // SERVO_CAL_1
+    {33, {1100, 500, 2500}},
+    // SERVO_CAL_2
+    {34, {1195, 500, 2500}},
+    // SERVO_CAL_3
+    {35, {1285, 500, 2500}},
+    // SERVO_CAL_4
+    {36, {1370, 500, 2500}},
+    // SERVO_CAL_5
+    {37, {1455, 500, 2500}},
+    // SERVO_CAL_6
+    {38, {1545, 500, 2500}},
+    // SERVO_CAL_7
+    {39, {1640, 500, 2500}},
+    // SERVO_CAL_8
+    {40, {1750, 500, 2500}},
+};
+#undef PB_PROTOCOL_FLASH
 }  // namespace detail
 
-// Looks a parameter up in a switch, so the table lives in flash, not RAM. False for an
-// unknown id; out may be null to test whether an id exists.
-inline bool param_spec(uint8_t param_id, ParamSpec *out) {
-  switch (param_id) {
-    case 1:  // CYCLE_STEPS
-      return detail::set_param_spec(out, 150, 10, 3000);
-    case 2:  // WAVE_SIZE
-      return detail::set_param_spec(out, 5, 1, 64);
-    case 3:  // UPDATE_INTERVAL_S
-      return detail::set_param_spec(out, 180, 10, 3600);
-    case 4:  // METHOD
-      return detail::set_param_spec(out, 3, 0, 3);
-    case 5:  // REF_DISTANCE_MM
-      return detail::set_param_spec(out, 280, 10, 10000);
-    case 6:  // REF_VALUE
-      return detail::set_param_spec(out, 980, 1, 1022);
-    case 7:  // DIAMETER_MM
-      return detail::set_param_spec(out, 155, 10, 1000);
-    case 8:  // COUNT_TOLERANCE
-      return detail::set_param_spec(out, 10, 0, 200);
-    case 9:  // BROADCAST_REPEATS
-      return detail::set_param_spec(out, 5, 1, 20);
-    case 10:  // GROUPS
-      return detail::set_param_spec(out, 0, 0, 64);
-    case 11:  // ROUND_MS
-      return detail::set_param_spec(out, 3000, 200, 60000L);
-    case 12:  // STATUS_PERIOD_MS
-      return detail::set_param_spec(out, 2000, 200, 60000L);
-    case 13:  // RADIUS_MIN_UM
-      return detail::set_param_spec(out, 77500L, 50000L, 150000L);
-    case 14:  // RADIUS_MAX_UM
-      return detail::set_param_spec(out, 117500L, 50000L, 150000L);
-    case 32:  // SERVO_CAL_0
-      return detail::set_param_spec(out, 1000, 500, 2500);
-    case 33:  // SERVO_CAL_1
-      return detail::set_param_spec(out, 1100, 500, 2500);
-    case 34:  // SERVO_CAL_2
-      return detail::set_param_spec(out, 1195, 500, 2500);
-    case 35:  // SERVO_CAL_3
-      return detail::set_param_spec(out, 1285, 500, 2500);
-    case 36:  // SERVO_CAL_4
-      return detail::set_param_spec(out, 1370, 500, 2500);
-    case 37:  // SERVO_CAL_5
-      return detail::set_param_spec(out, 1455, 500, 2500);
-    case 38:  // SERVO_CAL_6
-      return detail::set_param_spec(out, 1545, 500, 2500);
-    case 39:  // SERVO_CAL_7
-      return detail::set_param_spec(out, 1640, 500, 2500);
-    case 40:  // SERVO_CAL_8
-      return detail::set_param_spec(out, 1750, 500, 2500);
-    default:
-      return false;
+// Default and range of a parameter. False for an unknown id; out may be null to test
+// whether an id exists.
+PB_MUST_USE inline bool param_spec(uint8_t param_id, ParamSpec *out) {
+  for (uint8_t i = 0; i < kParamCount; ++i) {
+#ifdef __AVR__
+    if (pgm_read_byte(&detail::kParams[i].id) != param_id) continue;
+    if (out != 0) memcpy_P(out, &detail::kParams[i].spec, sizeof *out);
+#else
+    if (detail::kParams[i].id != param_id) continue;
+    if (out != 0) *out = detail::kParams[i].spec;
+#endif
+    return true;
   }
+  return false;
 }
 
 // Payload size of a message type; false for a type this definition does not know.
-inline bool message_payload_size(uint8_t type, uint8_t *size) {
+PB_MUST_USE inline bool message_payload_size(uint8_t type, uint8_t *size) {
   uint8_t bytes;
   switch (type) {
     case 0x01:  // START
@@ -237,8 +319,11 @@ inline bool message_payload_size(uint8_t type, uint8_t *size) {
     case 0x07:  // SET_ID
       bytes = 2;
       break;
+    case 0x08:  // SERVO_HOLD
+      bytes = 4;
+      break;
     case 0x20:  // STATUS
-      bytes = 44;
+      bytes = 46;
       break;
     case 0x21:  // INTENSITY
       bytes = 6;
@@ -253,51 +338,13 @@ inline bool message_payload_size(uint8_t type, uint8_t *size) {
   return true;
 }
 
-// Little-endian field access that never depends on the host's byte order or alignment.
-namespace wire {
-inline void put_u8(uint8_t *out, uint8_t value) {
-  out[0] = value;
-}
-inline void put_u16(uint8_t *out, uint16_t value) {
-  out[0] = static_cast<uint8_t>(value);
-  out[1] = static_cast<uint8_t>(value >> 8);
-}
-inline void put_u32(uint8_t *out, uint32_t value) {
-  out[0] = static_cast<uint8_t>(value);
-  out[1] = static_cast<uint8_t>(value >> 8);
-  out[2] = static_cast<uint8_t>(value >> 16);
-  out[3] = static_cast<uint8_t>(value >> 24);
-}
-inline void put_i8(uint8_t *out, int8_t value) {
-  put_u8(out, static_cast<uint8_t>(value));
-}
-inline void put_i16(uint8_t *out, int16_t value) {
-  put_u16(out, static_cast<uint16_t>(value));
-}
-inline void put_i32(uint8_t *out, int32_t value) {
-  put_u32(out, static_cast<uint32_t>(value));
-}
-inline uint8_t get_u8(const uint8_t *in) {
-  return in[0];
-}
-// The casts come before the shifts: AVR's int is 16 bits wide.
-inline uint16_t get_u16(const uint8_t *in) {
-  return static_cast<uint16_t>(in[0] | static_cast<uint16_t>(static_cast<uint16_t>(in[1]) << 8));
-}
-inline uint32_t get_u32(const uint8_t *in) {
-  return static_cast<uint32_t>(in[0]) | (static_cast<uint32_t>(in[1]) << 8) |
-         (static_cast<uint32_t>(in[2]) << 16) | (static_cast<uint32_t>(in[3]) << 24);
-}
-inline int8_t get_i8(const uint8_t *in) {
-  return static_cast<int8_t>(in[0]);
-}
-inline int16_t get_i16(const uint8_t *in) {
-  return static_cast<int16_t>(get_u16(in));
-}
-inline int32_t get_i32(const uint8_t *in) {
-  return static_cast<int32_t>(get_u32(in));
-}
-}  // namespace wire
+// Each message struct below is packed, its fields in wire order: on a little-endian machine (the
+// AVR, x86, ARM) its bytes are the payload, so encoding and decoding are one memcpy. A generic
+// table-driven codec and per-field shifts both cost the particle more flash (measured in README).
+// A packed field binds only to a const reference or a copy (test macros take references).
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "The message structs are the wire layout only on a little-endian machine"
+#endif
 
 // START (from base): Begin coordinated locomotion. START itself is the common start: each particle
 // runs one estimation round of ROUND_MS, then waits t_I and cycles. A repeated START with the same
@@ -321,38 +368,28 @@ struct StartMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, run_id);
-    wire::put_u8(out + 1, method);
-    wire::put_u16(out + 2, cycle_steps);
-    wire::put_u8(out + 4, wave_size);
-    wire::put_u16(out + 5, update_interval_s);
-    wire::put_u8(out + 7, phototaxis);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    run_id = wire::get_u8(in + 0);
-    method = wire::get_u8(in + 1);
-    cycle_steps = wire::get_u16(in + 2);
-    wave_size = wire::get_u8(in + 4);
-    update_interval_s = wire::get_u16(in + 5);
-    phototaxis = wire::get_u8(in + 7);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(StartMessage) == StartMessage::kPayloadSize, "packed wire layout");
 
 // STOP (from base): Stop at once: within one servo step the particle starts moving smoothly to the
 // contracted state and reports STOPPING, then IDLE.
 struct StopMessage {
   static const MessageType kType = MessageType::STOP;
   static const uint8_t kPayloadSize = 0;
-
-  // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
+  // Writes kPayloadSize (no) bytes and returns kPayloadSize.
   uint8_t encode(uint8_t * /*out*/) const { return kPayloadSize; }
-  // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t * /*in*/, uint8_t len) { return len == kPayloadSize; }
-};
+  // False unless len == kPayloadSize.
+  PB_MUST_USE bool decode(const uint8_t * /*in*/, uint8_t len) { return len == kPayloadSize; }
+} __attribute__((packed));
 
 // SET_PARAM (from base): Set one parameter and persist it in EEPROM. Answered by PARAM_VALUE.
 struct SetParamMessage {
@@ -368,20 +405,17 @@ struct SetParamMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, target);
-    wire::put_u8(out + 1, param);
-    wire::put_i32(out + 2, value);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    target = wire::get_u8(in + 0);
-    param = wire::get_u8(in + 1);
-    value = wire::get_i32(in + 2);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(SetParamMessage) == SetParamMessage::kPayloadSize, "packed wire layout");
 
 // GET_PARAM (from base): Read one parameter. Answered by PARAM_VALUE.
 struct GetParamMessage {
@@ -395,18 +429,17 @@ struct GetParamMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, target);
-    wire::put_u8(out + 1, param);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    target = wire::get_u8(in + 0);
-    param = wire::get_u8(in + 1);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(GetParamMessage) == GetParamMessage::kPayloadSize, "packed wire layout");
 
 // PING (from base): Ask for a STATUS frame now.
 struct PingMessage {
@@ -418,16 +451,17 @@ struct PingMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, target);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    target = wire::get_u8(in + 0);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(PingMessage) == PingMessage::kPayloadSize, "packed wire layout");
 
 // IDENTIFY (from base): Make an idle particle wiggle three times so a person can find it; it
 // answers with STATUS.
@@ -440,16 +474,17 @@ struct IdentifyMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, target);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    target = wire::get_u8(in + 0);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(IdentifyMessage) == IdentifyMessage::kPayloadSize, "packed wire layout");
 
 // SET_ID (from base): Give one particle a new id, stored in EEPROM; it answers with STATUS from the
 // new id.
@@ -464,24 +499,55 @@ struct SetIdMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, target);
-    wire::put_u8(out + 1, new_id);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    target = wire::get_u8(in + 0);
-    new_id = wire::get_u8(in + 1);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(SetIdMessage) == SetIdMessage::kPayloadSize, "packed wire layout");
+
+// SERVO_HOLD (from base): Servo calibration: make one resting particle (IDLE or DONE) hold its
+// servo at pulse_us for hold_s seconds, so a person can measure the radius that pulse gives. It
+// answers at once with STATUS: state HOLDING and servo_pulse_us = pulse_us when the hold took
+// effect, its unchanged state otherwise (running, or a pulse outside 500..2500 us). A new
+// SERVO_HOLD moves the pulse and restarts the time; hold_s = 0, STOP, START or IDENTIFY end the
+// hold, and the servo goes straight back to the pulse of the contracted radius. Never persisted.
+struct ServoHoldMessage {
+  static const MessageType kType = MessageType::SERVO_HOLD;
+  static const uint8_t kPayloadSize = 4;
+
+  // Id of the particle to hold (a broadcast is ignored).
+  uint8_t target;
+  // Servo pulse to hold, microseconds (500..2500).
+  uint16_t pulse_us;
+  // Seconds to hold, at most 60 (larger values hold 60) so that a forgotten hold cannot overheat
+  // the servo; resend to hold longer. 0 ends a hold.
+  uint8_t hold_s;
+
+  // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
+  uint8_t encode(uint8_t *out) const {
+    memcpy(out, this, kPayloadSize);
+    return kPayloadSize;
+  }
+  // False, leaving the fields untouched, unless len == kPayloadSize.
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
+    if (len != kPayloadSize) return false;
+    memcpy(this, in, kPayloadSize);
+    return true;
+  }
+} __attribute__((packed));
+static_assert(sizeof(ServoHoldMessage) == ServoHoldMessage::kPayloadSize, "packed wire layout");
 
 // STATUS (from particle): Periodic report of a particle's state, every STATUS_PERIOD_MS and on
 // PING.
 struct StatusMessage {
   static const MessageType kType = MessageType::STATUS;
-  static const uint8_t kPayloadSize = 44;
+  static const uint8_t kPayloadSize = 46;
 
   // What the particle is doing. (enum State)
   uint8_t state;
@@ -495,13 +561,15 @@ struct StatusMessage {
   uint8_t group_size;
   // Bit k set: sensor k is stuck at 0 or 1023 and left out of the intensity.
   uint8_t sensor_faults;
-  // Mean of the healthy sensors' 50-sample averages (0..1023).
+  // Mean of the healthy sensors' 50-sample averages after each one's calibration (SENSOR_GAMMA_k,
+  // SENSOR_GAIN_k) (0..1023).
   uint16_t intensity;
-  // Each sensor's 50-sample average (0..1023), A0..A5.
+  // Each sensor's 50-sample average as read, before calibration (0..1023), A0..A5.
   uint16_t sensors[6];
   // Position within the current expansion-contraction cycle in 1/1000 of T; 0 outside a cycle.
   uint16_t cycle_phase;
-  // Radius commanded now, micrometres.
+  // Radius the motion commands now, micrometres (while HOLDING, the motion's contracted radius: the
+  // servo then gets servo_pulse_us directly).
   uint32_t radius_um;
   // Milliseconds since reset (wraps after 49 days).
   uint32_t uptime_ms;
@@ -519,57 +587,23 @@ struct StatusMessage {
   uint8_t resets;
   // MCUSR at the last reset: bit 0 power-on, 1 external, 2 brown-out, 3 watchdog.
   uint8_t last_reset_cause;
+  // Servo pulse going out now, microseconds (through the SERVO_CAL table, or the one a SERVO_HOLD
+  // set).
+  uint16_t servo_pulse_us;
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, state);
-    wire::put_u8(out + 1, method);
-    wire::put_u8(out + 2, run_id);
-    wire::put_u8(out + 3, s_n);
-    wire::put_u8(out + 4, group_size);
-    wire::put_u8(out + 5, sensor_faults);
-    wire::put_u16(out + 6, intensity);
-    for (uint8_t i = 0; i < 6; ++i) {
-      wire::put_u16(out + 8 + 2 * i, sensors[i]);
-    }
-    wire::put_u16(out + 20, cycle_phase);
-    wire::put_u32(out + 22, radius_um);
-    wire::put_u32(out + 26, uptime_ms);
-    wire::put_u32(out + 30, definition_hash);
-    wire::put_u16(out + 34, rx_frames);
-    wire::put_u16(out + 36, rx_bad_crc);
-    wire::put_u16(out + 38, rx_bad_length);
-    wire::put_u16(out + 40, rx_skipped_bytes);
-    wire::put_u8(out + 42, resets);
-    wire::put_u8(out + 43, last_reset_cause);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    state = wire::get_u8(in + 0);
-    method = wire::get_u8(in + 1);
-    run_id = wire::get_u8(in + 2);
-    s_n = wire::get_u8(in + 3);
-    group_size = wire::get_u8(in + 4);
-    sensor_faults = wire::get_u8(in + 5);
-    intensity = wire::get_u16(in + 6);
-    for (uint8_t i = 0; i < 6; ++i) {
-      sensors[i] = wire::get_u16(in + 8 + 2 * i);
-    }
-    cycle_phase = wire::get_u16(in + 20);
-    radius_um = wire::get_u32(in + 22);
-    uptime_ms = wire::get_u32(in + 26);
-    definition_hash = wire::get_u32(in + 30);
-    rx_frames = wire::get_u16(in + 34);
-    rx_bad_crc = wire::get_u16(in + 36);
-    rx_bad_length = wire::get_u16(in + 38);
-    rx_skipped_bytes = wire::get_u16(in + 40);
-    resets = wire::get_u8(in + 42);
-    last_reset_cause = wire::get_u8(in + 43);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(StatusMessage) == StatusMessage::kPayloadSize, "packed wire layout");
 
 // INTENSITY (from particle): A particle's light reading, broadcast BROADCAST_REPEATS times per
 // estimation round for methods B-D.
@@ -588,22 +622,17 @@ struct IntensityMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, run_id);
-    wire::put_u16(out + 1, round);
-    wire::put_u8(out + 3, repeat);
-    wire::put_u16(out + 4, intensity);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    run_id = wire::get_u8(in + 0);
-    round = wire::get_u16(in + 1);
-    repeat = wire::get_u8(in + 3);
-    intensity = wire::get_u16(in + 4);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(IntensityMessage) == IntensityMessage::kPayloadSize, "packed wire layout");
 
 // PARAM_VALUE (from particle): Answer to SET_PARAM or GET_PARAM.
 struct ParamValueMessage {
@@ -619,20 +648,17 @@ struct ParamValueMessage {
 
   // Writes kPayloadSize bytes, little-endian, and returns kPayloadSize.
   uint8_t encode(uint8_t *out) const {
-    wire::put_u8(out + 0, param);
-    wire::put_u8(out + 1, result);
-    wire::put_i32(out + 2, value);
+    memcpy(out, this, kPayloadSize);
     return kPayloadSize;
   }
   // False, leaving the fields untouched, unless len == kPayloadSize.
-  bool decode(const uint8_t *in, uint8_t len) {
+  PB_MUST_USE bool decode(const uint8_t *in, uint8_t len) {
     if (len != kPayloadSize) return false;
-    param = wire::get_u8(in + 0);
-    result = wire::get_u8(in + 1);
-    value = wire::get_i32(in + 2);
+    memcpy(this, in, kPayloadSize);
     return true;
   }
-};
+} __attribute__((packed));
+static_assert(sizeof(ParamValueMessage) == ParamValueMessage::kPayloadSize, "packed wire layout");
 
 #ifdef PB_PROTOCOL_DEFINE_STATICS
 // Out-of-class definitions, emitted once (by frame.cpp), so that binding kType or kPayloadSize
@@ -651,6 +677,8 @@ const MessageType IdentifyMessage::kType;
 const uint8_t IdentifyMessage::kPayloadSize;
 const MessageType SetIdMessage::kType;
 const uint8_t SetIdMessage::kPayloadSize;
+const MessageType ServoHoldMessage::kType;
+const uint8_t ServoHoldMessage::kPayloadSize;
 const MessageType StatusMessage::kType;
 const uint8_t StatusMessage::kPayloadSize;
 const MessageType IntensityMessage::kType;

@@ -1,6 +1,8 @@
 // EEPROM-backed settings with defaults, range checks and wear-sparing writes.
 #include "settings.h"
 
+#include <string.h>
+
 #include "frame.h"
 
 namespace pb {
@@ -43,8 +45,9 @@ Settings::Settings(Storage &storage)
     : storage_(storage), id_(kUnassignedId), resets_(0), reset_cause_(0) {}
 
 bool Settings::load() {
-  const bool valid = block_valid();
-  if (!valid) write_defaults();
+  const Block block = check_block();
+  if (block != kBlockValid) write_defaults(block == kBlockOtherParams);
+  const bool valid = block == kBlockValid;
   id_ = storage_.read(eeprom_layout::kIdAddress);
   resets_ = storage_.read(eeprom_layout::kResetsAddress);
   reset_cause_ = storage_.read(eeprom_layout::kResetCauseAddress);
@@ -79,7 +82,8 @@ int32_t Settings::get(Param param) const {
 
 ParamResult Settings::set(uint8_t param, int32_t value) {
   if (!known(param)) return ParamResult::UNKNOWN_PARAM;
-  if (!acceptable(param, value)) return ParamResult::OUT_OF_RANGE;
+  const ParamResult result = check(param, value);
+  if (result != ParamResult::OK) return result;
   write_value(param, value);
   update_crc();
   return ParamResult::OK;
@@ -91,47 +95,56 @@ void Settings::servo_table(uint16_t table[kServoCalPoints]) const {
   }
 }
 
-bool Settings::acceptable(uint8_t param, int32_t value) const {
+ParamResult Settings::check(uint8_t param, int32_t value) const {
   ParamSpec spec;
-  if (!param_spec(param, &spec)) return false;
-  if (value < spec.min || value > spec.max) return false;
-  if (param == kRadiusMin) return value < get(Param::RADIUS_MAX_UM);
-  if (param == kRadiusMax) return value > get(Param::RADIUS_MIN_UM);
+  if (!param_spec(param, &spec)) return ParamResult::UNKNOWN_PARAM;
+  if (value < spec.min || value > spec.max) return ParamResult::OUT_OF_RANGE;
+  // Values inside the range that contradict another parameter get a result of their own, so a
+  // person sees why a value the range allows was refused.
+  if ((param == kRadiusMin && value >= get(Param::RADIUS_MAX_UM)) ||
+      (param == kRadiusMax && value <= get(Param::RADIUS_MIN_UM))) {
+    return ParamResult::RADIUS_MIN_NOT_BELOW_MAX;
+  }
   if (is_servo_cal(param)) {
     uint16_t table[kServoCalPoints];
     servo_table(table);
     table[param - kServoCal0] = static_cast<uint16_t>(value);
-    return servo_table_monotonic(table);
+    if (!servo_table_monotonic(table)) return ParamResult::SERVO_TABLE_NOT_MONOTONIC;
   }
-  return true;
+  return ParamResult::OK;
 }
 
-bool Settings::block_valid() const {
+Settings::Block Settings::check_block() const {
   using namespace eeprom_layout;
-  if (storage_.read(0) != kMagic0 || storage_.read(1) != kMagic1) return false;
-  if (storage_.read(kVersionAddress) != kVersion) return false;
-  if (storage_.read(kCountAddress) != kParamCount) return false;
+  if (storage_.read(0) != kMagic0 || storage_.read(1) != kMagic1) return kBlockInvalid;
+  if (storage_.read(kVersionAddress) != kVersion) return kBlockInvalid;
   const uint16_t stored = static_cast<uint16_t>(
       storage_.read(kCrcAddress) | static_cast<uint16_t>(storage_.read(kCrcAddress + 1) << 8));
+  if (stored != compute_crc()) return kBlockInvalid;
   // Values are not range-checked again: set() admitted them, a firmware with other ranges must
   // bump kVersion, and every consumer copes with odd values anyway (no division by zero).
-  return stored == compute_crc();
+  return storage_.read(kCountAddress) == kParamCount ? kBlockValid : kBlockOtherParams;
 }
 
-void Settings::write_defaults() {
+void Settings::write_defaults(bool keep_valid_values) {
   using namespace eeprom_layout;
-  write_byte(0, kMagic0);
-  write_byte(1, kMagic1);
-  write_byte(kVersionAddress, kVersion);
+  if (!keep_valid_values) {
+    write_byte(0, kMagic0);
+    write_byte(1, kMagic1);
+    write_byte(kVersionAddress, kVersion);
+    write_byte(kIdAddress, kUnassignedId);
+    write_byte(kResetsAddress, 0);
+    write_byte(kResetCauseAddress, 0);
+  }
   write_byte(kCountAddress, kParamCount);
-  write_byte(kIdAddress, kUnassignedId);
-  write_byte(kResetsAddress, 0);
-  write_byte(kResetCauseAddress, 0);
   // Slots of ids the protocol lacks keep whatever they hold (the CRC covers them): on a new chip
   // that spares ~220 writes of 3.4 ms each.
   ParamSpec spec;
   for (uint8_t param = 0; param < kParamSlots; ++param) {
-    if (param_spec(param, &spec)) write_value(param, spec.default_value);
+    if (!param_spec(param, &spec)) continue;
+    const int32_t value = read_value(param);
+    if (keep_valid_values && value >= spec.min && value <= spec.max) continue;
+    write_value(param, spec.default_value);
   }
   update_crc();
 }
@@ -149,17 +162,23 @@ void Settings::update_crc() {
   write_byte(eeprom_layout::kCrcAddress + 1, static_cast<uint8_t>(crc >> 8));
 }
 
+// The values are stored little-endian, the byte order of every machine this code runs on (the
+// message structs rely on it too, see protocol_gen.h), so a value is its four bytes as stored:
+// copying them costs the AVR far less flash than shifting each into place.
 int32_t Settings::read_value(uint8_t param) const {
   const uint16_t a = static_cast<uint16_t>(eeprom_layout::kParamsAddress + 4u * param);
-  uint32_t v = 0;
-  for (uint8_t i = 0; i < 4; ++i) v |= static_cast<uint32_t>(storage_.read(a + i)) << (8 * i);
-  return static_cast<int32_t>(v);
+  uint8_t bytes[4];
+  for (uint8_t i = 0; i < 4; ++i) bytes[i] = storage_.read(a + i);
+  int32_t value;
+  memcpy(&value, bytes, sizeof value);
+  return value;
 }
 
 void Settings::write_value(uint8_t param, int32_t value) {
   const uint16_t a = static_cast<uint16_t>(eeprom_layout::kParamsAddress + 4u * param);
-  const uint32_t v = static_cast<uint32_t>(value);
-  for (uint8_t i = 0; i < 4; ++i) write_byte(a + i, static_cast<uint8_t>(v >> (8 * i)));
+  uint8_t bytes[4];
+  memcpy(bytes, &value, sizeof bytes);
+  for (uint8_t i = 0; i < 4; ++i) write_byte(a + i, bytes[i]);
 }
 
 void Settings::write_byte(uint16_t address, uint8_t value) {

@@ -58,38 +58,48 @@ class Settings {
  public:
   explicit Settings(Storage &storage);
 
-  // Checks the stored block. A blank or corrupt one (bad magic, version, count or CRC) is
-  // replaced by the defaults with the unassigned id and no resets.
-  // Returns true when the block was valid.
+  // Checks the stored block. A blank or corrupt one (bad magic, version or CRC) is replaced by
+  // the defaults with the unassigned id and no resets. A sound block from a firmware with other
+  // parameters (a firmware update that added some) keeps the id, the reset count and every value
+  // inside its parameter's range; the others, among them the new parameters' slots, which an
+  // erased or never-written EEPROM leaves at -1, get their defaults. (So a parameter's range
+  // must not contain -1, and an id that once meant another parameter must not be reused.)
+  // Returns true when the block was valid as it was.
   bool load();
   // Counts a reset (saturating at 255) and stores its cause (MCUSR).
   void record_reset(uint8_t cause);
 
   uint8_t id() const { return id_; }
   // Any id but the base station's, broadcast and unassigned (1..253); false otherwise.
-  bool set_id(uint8_t id);
+  PB_MUST_USE bool set_id(uint8_t id);
   uint8_t resets() const { return resets_; }
   uint8_t last_reset_cause() const { return reset_cause_; }
 
   // False for an unknown parameter id.
-  bool get(uint8_t param, int32_t *value) const;
+  PB_MUST_USE bool get(uint8_t param, int32_t *value) const;
   // The value of a known parameter.
   int32_t get(Param param) const;
-  // Range checks, then stores the value, writing only the bytes that change. RADIUS_MIN_UM must
-  // stay below RADIUS_MAX_UM and the servo table monotonic, or OUT_OF_RANGE. (BUSY is the
-  // caller's decision.)
+  // Range checks, then stores the value, writing only the bytes that change: OUT_OF_RANGE outside
+  // min..max, RADIUS_MIN_NOT_BELOW_MAX unless RADIUS_MIN_UM stays below RADIUS_MAX_UM,
+  // SERVO_TABLE_NOT_MONOTONIC unless the servo table stays monotonic. (BUSY is the caller's.)
   ParamResult set(uint8_t param, int32_t value);
   void servo_table(uint16_t table[kServoCalPoints]) const;
 
  private:
-  bool block_valid() const;
-  void write_defaults();
+  // A block in this layout but written by a firmware with other parameters (another count) is
+  // carried over rather than reset: see load().
+  enum Block : uint8_t { kBlockValid, kBlockOtherParams, kBlockInvalid };
+  Block check_block() const;
+  // Every parameter to its default (keep_valid_values: only those whose stored value is outside
+  // its range), the count to this firmware's; without keep_valid_values also the header, the
+  // unassigned id and no resets.
+  void write_defaults(bool keep_valid_values);
   uint16_t compute_crc() const;
   void update_crc();
   int32_t read_value(uint8_t param) const;
   void write_value(uint8_t param, int32_t value);
   void write_byte(uint16_t address, uint8_t value);
-  bool acceptable(uint8_t param, int32_t value) const;
+  ParamResult check(uint8_t param, int32_t value) const;
 
   Storage &storage_;
   uint8_t id_;

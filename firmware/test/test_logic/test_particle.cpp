@@ -135,7 +135,7 @@ TEST_CASE("SET_PARAM is refused while running and applied at rest, GET_PARAM rea
   pb::ParamValueMessage reply;
   REQUIRE(reply.decode(frames[0].payload, frames[0].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::BUSY));
-  CHECK(reply.value == 150);
+  CHECK(static_cast<int32_t>(reply.value) == 150);  // a copy: the field is packed
   b.send(pb::StopMessage());
   b.advance(700);
   b.drain(frames, 4);
@@ -151,7 +151,7 @@ TEST_CASE("SET_PARAM is refused while running and applied at rest, GET_PARAM rea
   REQUIRE(reply.decode(frames[0].payload, frames[0].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::OK));
   REQUIRE(reply.decode(frames[1].payload, frames[1].length));
-  CHECK(reply.value == 75);
+  CHECK(static_cast<int32_t>(reply.value) == 75);
   REQUIRE(reply.decode(frames[2].payload, frames[2].length));
   CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::UNKNOWN_PARAM));
 }
@@ -163,8 +163,9 @@ TEST_CASE("a full transmit queue drops whole frames, never parts of one") {
   pb::PingMessage ping;
   ping.target = pb::kUnassignedId;
   for (int i = 0; i < 5; ++i) b.send(ping);
-  // STATUS frames are 52 bytes: two fit in 128.
-  CHECK(b.particle.tx_pending() == 104);
+  // STATUS frames are 54 bytes: two fit in 128.
+  const size_t status_frame = pb::StatusMessage::kPayloadSize + pb::kFrameOverhead;
+  CHECK(b.particle.tx_pending() == 2 * status_frame);
   CHECK(b.particle.tx_dropped_frames() == 3);
   CHECK(b.drain(frames, 8) == 2);
   CHECK(static_cast<uint8_t>(frames[1].seq - frames[0].seq) == 1);
@@ -223,6 +224,27 @@ TEST_CASE("SET_ID renames only the addressed particle and persists") {
   pb::Particle again(b.storage, 1, 5);
   again.begin(0);
   CHECK(again.id() == 12);
+}
+
+TEST_CASE("SET_ID to an id no particle may take is refused and answered from the old id") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  pb::SetIdMessage set;
+  set.target = pb::kUnassignedId;
+  set.new_id = 7;
+  b.send(set);
+  REQUIRE(b.drain(frames, 4) == 1);
+  const uint8_t refused[] = {pb::kBaseStationId, pb::kUnassignedId, pb::kBroadcastId};
+  for (size_t i = 0; i < sizeof refused; ++i) {
+    set.target = 7;
+    set.new_id = refused[i];
+    b.send(set);
+    CHECK(b.particle.id() == 7);
+    REQUIRE(b.drain(frames, 4) == 1);
+    CHECK(frames[0].sender == 7);
+    CHECK(frames[0].type == static_cast<uint8_t>(pb::MessageType::STATUS));
+  }
 }
 
 namespace {
@@ -348,7 +370,7 @@ TEST_CASE("broadcast SET_PARAM, GET_PARAM and IDENTIFY are answered in a reply s
     pb::ParamValueMessage reply;
     REQUIRE(reply.decode(frames[0].payload, frames[0].length));
     CHECK(reply.result == static_cast<uint8_t>(pb::ParamResult::OK));
-    CHECK(reply.value == 75);
+    CHECK(static_cast<int32_t>(reply.value) == 75);
 
     pb::GetParamMessage get;
     get.target = pb::kBroadcastId;
@@ -501,4 +523,144 @@ TEST_CASE("ticked as main.cpp does, each 50 Hz frame carries the next step of th
       CHECK(latched[f] == pb::servo_pulse_us(pb::cycle_radius_um(k, steps, g), g, table));
     }
   }
+}
+
+namespace {
+
+pb::ServoHoldMessage hold_message(uint8_t target, uint16_t pulse_us, uint8_t hold_s) {
+  pb::ServoHoldMessage m;
+  m.target = target;
+  m.pulse_us = pulse_us;
+  m.hold_s = hold_s;
+  return m;
+}
+
+// The STATUS a command was answered with (the only frame queued).
+pb::StatusMessage answer(Bench &b) {
+  pb::Frame frames[4];
+  REQUIRE(b.drain(frames, 4) == 1);
+  return status_of(frames[0]);
+}
+
+}  // namespace
+
+TEST_CASE("SERVO_HOLD holds the pulse, answers with STATUS HOLDING, and lets go in time") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  const uint16_t contracted = b.particle.servo_pulse_us();
+  CHECK(contracted == 1000);
+  b.send(hold_message(pb::kUnassignedId, 1777, 2));
+  // const: doctest binds a reference to what it checks, which a packed field only allows const.
+  const pb::StatusMessage s = answer(b);
+  CHECK(s.state == static_cast<uint8_t>(pb::State::HOLDING));
+  CHECK(s.servo_pulse_us == 1777);
+  CHECK(s.radius_um == 77500);  // the motion's radius; the servo follows the held pulse
+  CHECK(b.particle.servo_pulse_us() == 1777);
+  CHECK(b.particle.state() == pb::State::HOLDING);
+  // A new hold moves the pulse and restarts the time.
+  b.advance(1500);
+  b.drain(frames, 4);
+  b.send(hold_message(pb::kUnassignedId, 1200, 2));
+  CHECK(answer(b).servo_pulse_us == 1200);
+  b.advance(1990);
+  CHECK(b.particle.servo_pulse_us() == 1200);
+  b.advance(20);
+  CHECK(b.particle.servo_pulse_us() == contracted);
+  CHECK(b.particle.state() == pb::State::IDLE);
+}
+
+TEST_CASE("STOP, START, IDENTIFY and hold_s 0 end a hold; it is refused while running") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  b.send(hold_message(pb::kUnassignedId, 2000, 30));
+  CHECK(b.particle.servo_pulse_us() == 2000);
+  b.send(pb::StopMessage());
+  CHECK(b.particle.servo_pulse_us() == 1000);
+  CHECK(b.particle.state() != pb::State::HOLDING);
+
+  b.send(hold_message(pb::kUnassignedId, 2000, 30));
+  b.send(hold_message(pb::kUnassignedId, 2000, 0));
+  CHECK(b.particle.servo_pulse_us() == 1000);
+
+  pb::IdentifyMessage identify;
+  identify.target = pb::kUnassignedId;
+  b.send(hold_message(pb::kUnassignedId, 2000, 30));
+  b.send(identify);
+  CHECK(b.particle.state() == pb::State::IDENTIFYING);
+  b.advance(2000);
+
+  pb::StartMessage start;
+  memset(&start, 0, sizeof start);
+  start.run_id = 4;
+  start.method = static_cast<uint8_t>(pb::Method::DIRECT);
+  b.send(hold_message(pb::kUnassignedId, 2000, 30));
+  b.drain(frames, 4);
+  b.send(start);
+  CHECK(b.particle.state() == pb::State::ESTIMATING);
+  CHECK(b.particle.servo_pulse_us() == 1000);
+  // Running: refused, and the answer shows it.
+  b.send(hold_message(pb::kUnassignedId, 2000, 30));
+  const pb::StatusMessage s = answer(b);
+  CHECK(s.state == static_cast<uint8_t>(pb::State::ESTIMATING));
+  CHECK(s.servo_pulse_us == 1000);
+}
+
+TEST_CASE("a hold is refused out of 500..2500 us, capped at 60 s, and never by broadcast") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  b.send(hold_message(pb::kUnassignedId, 499, 10));
+  CHECK(answer(b).state == static_cast<uint8_t>(pb::State::IDLE));
+  b.send(hold_message(pb::kUnassignedId, 2501, 10));
+  CHECK(answer(b).servo_pulse_us == 1000);
+  b.send(hold_message(pb::kBroadcastId, 1500, 10));
+  CHECK(b.drain(frames, 4) == 0);
+  CHECK(b.particle.servo_pulse_us() == 1000);
+  b.send(hold_message(pb::kUnassignedId, 2500, 255));
+  CHECK(answer(b).servo_pulse_us == 2500);
+  b.advance(59990);
+  CHECK(b.particle.servo_pulse_us() == 2500);
+  b.advance(20);
+  CHECK(b.particle.servo_pulse_us() == 1000);
+}
+
+TEST_CASE("the photocell calibration parameters change the intensity, not the raw readings") {
+  Bench b;
+  pb::Frame frames[4];
+  b.drain(frames, 4);
+  pb::PingMessage ping;
+  ping.target = pb::kUnassignedId;
+  b.send(ping);
+  CHECK(answer(b).intensity == 600);
+  pb::SetParamMessage set;
+  set.target = pb::kUnassignedId;
+  for (uint8_t k = 0; k < 6; ++k) {
+    set.param = static_cast<uint8_t>(static_cast<uint8_t>(pb::Param::SENSOR_GAMMA_0) + k);
+    set.value = 800;
+    b.send(set);
+    set.param = static_cast<uint8_t>(static_cast<uint8_t>(pb::Param::SENSOR_GAIN_0) + k);
+    set.value = 1500;
+    b.send(set);
+  }
+  b.drain(frames, 4);
+  b.advance(100);  // a whole new reading
+  b.drain(frames, 4);
+  b.send(ping);
+  const pb::StatusMessage s = answer(b);
+  const uint16_t expected = pb::calibrated_reading(600, pb::sensor_calibration(800, 1500));
+  CHECK(expected != 600);
+  CHECK(s.intensity == expected);
+  CHECK(s.sensors[0] == 600);
+  // The calibration is in EEPROM: a particle booted from it reads the same.
+  pb::Particle again(b.storage, 1, 5);
+  again.begin(0);
+  for (int i = 0; i < 50 * 8; ++i) again.on_adc_sample(again.next_sensor(), 600);
+  uint8_t payload[pb::StatusMessage::kPayloadSize];
+  again.status_payload(payload);
+  pb::StatusMessage rebooted;
+  REQUIRE(rebooted.decode(payload, sizeof payload));
+  const uint16_t intensity = rebooted.intensity;
+  CHECK(intensity == expected);
 }

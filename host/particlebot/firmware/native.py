@@ -19,12 +19,13 @@ from pathlib import Path
 from types import TracebackType
 from typing import Self
 
-from particlebot.protocol.generated import Method, Status
+from particlebot.protocol.generated import FRAME_OVERHEAD, MAX_PAYLOAD, Method, Status
 
 SENSOR_COUNT = 6
 EEPROM_SIZE = 1024
 _STATUS_CAPACITY = 64
 _TX_CHUNK = 4096
+_MAX_FRAME = MAX_PAYLOAD + FRAME_OVERHEAD
 
 _log = logging.getLogger(__name__)
 
@@ -54,12 +55,17 @@ def _declare(lib: ctypes.CDLL) -> None:
         "pb_particle_receive": (None, [handle, _U8P, ctypes.c_size_t]),
         "pb_particle_tick": (None, [handle, ctypes.c_uint32]),
         "pb_particle_transmit": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
+        "pb_inter_frame_gap_ms": (ctypes.c_uint8, []),
         "pb_particle_id": (ctypes.c_uint8, [handle]),
         "pb_particle_servo_pulse_us": (ctypes.c_uint16, [handle]),
         "pb_particle_radius_um": (ctypes.c_uint32, [handle]),
         "pb_particle_status_payload": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
         "pb_particle_eeprom": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
         "pb_definition_hash": (ctypes.c_uint32, []),
+        "pb_calibrated_reading": (
+            ctypes.c_uint16,
+            [ctypes.c_uint16, ctypes.c_uint16, ctypes.c_uint16],
+        ),
         "pb_estimate": (
             ctypes.c_uint8,
             [
@@ -218,6 +224,18 @@ class NativeParticle:
         """The time of the last tick()."""
         return self._now_ms
 
+    @property
+    def inter_frame_gap_ms(self) -> int:
+        """See inter_frame_gap_ms()."""
+        return int(self._lib.pb_inter_frame_gap_ms())
+
+    def transmit_frame(self) -> bytes:
+        """The next frame queued for Serial1 (b"" when none), removed from the queue: what the
+        firmware hands its serial port at once, before a silence of inter_frame_gap_ms()."""
+        buffer = (ctypes.c_uint8 * _MAX_FRAME)()
+        n = self._lib.pb_particle_transmit(self._h(), buffer, _MAX_FRAME)
+        return bytes(buffer[:n])
+
     def transmit(self, limit: int = _TX_CHUNK) -> bytes:
         """Everything queued for Serial1 (at most limit bytes), removed from the queue."""
         out = bytearray()
@@ -261,6 +279,18 @@ class NativeParticle:
 
 
 # ---- pure functions ------------------------------------------------------------------------------
+
+
+def inter_frame_gap_ms() -> int:
+    """The silence the firmware keeps on its serial port between two frames, so that its XBee
+    sends each frame as an RF packet of its own."""
+    return int(load_library().pb_inter_frame_gap_ms())
+
+
+def calibrated_reading(raw: int, gamma_milli: int, gain_milli: int) -> int:
+    """A photocell's raw reading (0..1023) as the firmware corrects it for the calibration
+    parameters SENSOR_GAMMA_k = gamma_milli and SENSOR_GAIN_k = gain_milli (thousandths)."""
+    return int(load_library().pb_calibrated_reading(raw, gamma_milli, gain_milli))
 
 
 def definition_hash() -> int:

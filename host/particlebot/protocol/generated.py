@@ -8,8 +8,8 @@ import struct
 from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple, Self, TypeAlias
 
-GENERATOR_VERSION = 1
-DEFINITION_HASH = 0xDCF5A94F
+GENERATOR_VERSION = 2
+DEFINITION_HASH = 0xF1AAC96B
 """CRC-32 of the definition's layout; every STATUS frame carries the firmware's."""
 SYNC = bytes((0xA5, 0x5A))
 MAX_PAYLOAD = 48
@@ -44,6 +44,10 @@ class State(enum.IntEnum):
     """Phototaxis finished: the measured intensity stopped increasing."""
     IDENTIFYING = 7
     """Wiggling so a person can see which particle this is."""
+    HOLDING = 8
+    """Holding the servo at the pulse a SERVO_HOLD asked for (servo calibration), until its time
+    runs out, STOP, START or IDENTIFY.
+    """
 
 
 class Method(enum.IntEnum):
@@ -92,6 +96,32 @@ class Param(enum.IntEnum):
     """Contracted radius R_min in micrometres."""
     RADIUS_MAX_UM = 14
     """Fully expanded radius in micrometres (R_min + Delta R)."""
+    SENSOR_GAMMA_0 = 16
+    """Photocell A0's gamma (eq. 7) in thousandths; 1000 means gamma = 1, the law eq. 14 assumes."""
+    SENSOR_GAMMA_1 = 17
+    """Photocell A1's gamma (eq. 7) in thousandths."""
+    SENSOR_GAMMA_2 = 18
+    """Photocell A2's gamma (eq. 7) in thousandths."""
+    SENSOR_GAMMA_3 = 19
+    """Photocell A3's gamma (eq. 7) in thousandths."""
+    SENSOR_GAMMA_4 = 20
+    """Photocell A4's gamma (eq. 7) in thousandths."""
+    SENSOR_GAMMA_5 = 21
+    """Photocell A5's gamma (eq. 7) in thousandths."""
+    SENSOR_GAIN_0 = 22
+    """Photocell A0's gain in thousandths: the factor on its gamma-corrected resistance ratio; 1000
+    leaves it.
+    """
+    SENSOR_GAIN_1 = 23
+    """Photocell A1's gain in thousandths."""
+    SENSOR_GAIN_2 = 24
+    """Photocell A2's gain in thousandths."""
+    SENSOR_GAIN_3 = 25
+    """Photocell A3's gain in thousandths."""
+    SENSOR_GAIN_4 = 26
+    """Photocell A4's gain in thousandths."""
+    SENSOR_GAIN_5 = 27
+    """Photocell A5's gain in thousandths."""
     SERVO_CAL_0 = 32
     """Servo pulse (us) at calibration point 0 of 9 (R_min)."""
     SERVO_CAL_1 = 33
@@ -120,9 +150,15 @@ class ParamResult(enum.IntEnum):
     UNKNOWN_PARAM = 1
     """No parameter has that number."""
     OUT_OF_RANGE = 2
-    """Value outside the parameter's min..max, or it would make the servo table non-monotonic."""
+    """Value outside the parameter's min..max."""
     BUSY = 3
     """Refused while running; STOP first."""
+    SERVO_TABLE_NOT_MONOTONIC = 4
+    """Inside min..max, but the nine SERVO_CAL pulses would no longer rise (or fall) from point 0 to
+    point 8: change the neighbouring points first.
+    """
+    RADIUS_MIN_NOT_BELOW_MAX = 5
+    """Inside min..max, but RADIUS_MIN_UM would no longer be below RADIUS_MAX_UM."""
 
 
 class MessageType(enum.IntEnum):
@@ -135,6 +171,7 @@ class MessageType(enum.IntEnum):
     PING = 0x05
     IDENTIFY = 0x06
     SET_ID = 0x07
+    SERVO_HOLD = 0x08
     STATUS = 0x20
     INTENSITY = 0x21
     PARAM_VALUE = 0x22
@@ -234,6 +271,80 @@ PARAM_SPECS: dict[Param, ParamSpec] = {
         50000,
         150000,
         "Fully expanded radius in micrometres (R_min + Delta R).",
+    ),
+    Param.SENSOR_GAMMA_0: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A0's gamma (eq. 7) in thousandths; 1000 means gamma = 1, the law eq. 14 "
+        "assumes.",
+    ),
+    Param.SENSOR_GAMMA_1: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A1's gamma (eq. 7) in thousandths.",
+    ),
+    Param.SENSOR_GAMMA_2: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A2's gamma (eq. 7) in thousandths.",
+    ),
+    Param.SENSOR_GAMMA_3: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A3's gamma (eq. 7) in thousandths.",
+    ),
+    Param.SENSOR_GAMMA_4: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A4's gamma (eq. 7) in thousandths.",
+    ),
+    Param.SENSOR_GAMMA_5: ParamSpec(
+        1000,
+        250,
+        4000,
+        "Photocell A5's gamma (eq. 7) in thousandths.",
+    ),
+    Param.SENSOR_GAIN_0: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A0's gain in thousandths: the factor on its gamma-corrected resistance ratio; "
+        "1000 leaves it.",
+    ),
+    Param.SENSOR_GAIN_1: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A1's gain in thousandths.",
+    ),
+    Param.SENSOR_GAIN_2: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A2's gain in thousandths.",
+    ),
+    Param.SENSOR_GAIN_3: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A3's gain in thousandths.",
+    ),
+    Param.SENSOR_GAIN_4: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A4's gain in thousandths.",
+    ),
+    Param.SENSOR_GAIN_5: ParamSpec(
+        1000,
+        100,
+        10000,
+        "Photocell A5's gain in thousandths.",
     ),
     Param.SERVO_CAL_0: ParamSpec(
         1000,
@@ -519,13 +630,46 @@ class SetId(Message):
 
 
 @dataclass(frozen=True, slots=True)
+class ServoHold(Message):
+    """SERVO_HOLD: Servo calibration: make one resting particle (IDLE or DONE) hold its servo at
+    pulse_us for hold_s seconds, so a person can measure the radius that pulse gives. It answers at
+    once with STATUS: state HOLDING and servo_pulse_us = pulse_us when the hold took effect, its
+    unchanged state otherwise (running, or a pulse outside 500..2500 us). A new SERVO_HOLD moves the
+    pulse and restarts the time; hold_s = 0, STOP, START or IDENTIFY end the hold, and the servo
+    goes straight back to the pulse of the contracted radius. Never persisted.
+    """
+
+    MESSAGE_TYPE: ClassVar[MessageType] = MessageType.SERVO_HOLD
+    PAYLOAD_SIZE: ClassVar[int] = 4
+    SENT_BY: ClassVar[str] = "base"
+    _LAYOUT: ClassVar[struct.Struct] = struct.Struct("<BHB")
+
+    target: int
+    """Id of the particle to hold (a broadcast is ignored)."""
+    pulse_us: int
+    """Servo pulse to hold, microseconds (500..2500)."""
+    hold_s: int
+    """Seconds to hold, at most 60 (larger values hold 60) so that a forgotten hold cannot overheat
+    the servo; resend to hold longer. 0 ends a hold.
+    """
+
+    def encode_payload(self) -> bytes:
+        return _pack(self._LAYOUT, self.target, self.pulse_us, self.hold_s)
+
+    @classmethod
+    def decode_payload(cls, data: bytes) -> Self:
+        values = _unpack("ServoHold", cls._LAYOUT, data)
+        return cls(target=values[0], pulse_us=values[1], hold_s=values[2])
+
+
+@dataclass(frozen=True, slots=True)
 class Status(Message):
     """STATUS: Periodic report of a particle's state, every STATUS_PERIOD_MS and on PING."""
 
     MESSAGE_TYPE: ClassVar[MessageType] = MessageType.STATUS
-    PAYLOAD_SIZE: ClassVar[int] = 44
+    PAYLOAD_SIZE: ClassVar[int] = 46
     SENT_BY: ClassVar[str] = "particle"
-    _LAYOUT: ClassVar[struct.Struct] = struct.Struct("<BBBBBBH6HHIIIHHHHBB")
+    _LAYOUT: ClassVar[struct.Struct] = struct.Struct("<BBBBBBH6HHIIIHHHHBBH")
 
     state: int
     """What the particle is doing. (State)"""
@@ -540,13 +684,17 @@ class Status(Message):
     sensor_faults: int
     """Bit k set: sensor k is stuck at 0 or 1023 and left out of the intensity."""
     intensity: int
-    """Mean of the healthy sensors' 50-sample averages (0..1023)."""
+    """Mean of the healthy sensors' 50-sample averages after each one's calibration (SENSOR_GAMMA_k,
+    SENSOR_GAIN_k) (0..1023).
+    """
     sensors: tuple[int, ...]
-    """Each sensor's 50-sample average (0..1023), A0..A5."""
+    """Each sensor's 50-sample average as read, before calibration (0..1023), A0..A5."""
     cycle_phase: int
     """Position within the current expansion-contraction cycle in 1/1000 of T; 0 outside a cycle."""
     radius_um: int
-    """Radius commanded now, micrometres."""
+    """Radius the motion commands now, micrometres (while HOLDING, the motion's contracted radius:
+    the servo then gets servo_pulse_us directly).
+    """
     uptime_ms: int
     """Milliseconds since reset (wraps after 49 days)."""
     definition_hash: int
@@ -563,6 +711,10 @@ class Status(Message):
     """Resets counted in EEPROM (power-on, watchdog, ...), saturating."""
     last_reset_cause: int
     """MCUSR at the last reset: bit 0 power-on, 1 external, 2 brown-out, 3 watchdog."""
+    servo_pulse_us: int
+    """Servo pulse going out now, microseconds (through the SERVO_CAL table, or the one a SERVO_HOLD
+    set).
+    """
 
     def encode_payload(self) -> bytes:
         return _pack(
@@ -585,6 +737,7 @@ class Status(Message):
             self.rx_skipped_bytes,
             self.resets,
             self.last_reset_cause,
+            self.servo_pulse_us,
         )
 
     @classmethod
@@ -609,6 +762,7 @@ class Status(Message):
             rx_skipped_bytes=values[20],
             resets=values[21],
             last_reset_cause=values[22],
+            servo_pulse_us=values[23],
         )
 
 
@@ -667,7 +821,17 @@ class ParamValue(Message):
 
 
 AnyMessage: TypeAlias = (
-    Start | Stop | SetParam | GetParam | Ping | Identify | SetId | Status | Intensity | ParamValue
+    Start
+    | Stop
+    | SetParam
+    | GetParam
+    | Ping
+    | Identify
+    | SetId
+    | ServoHold
+    | Status
+    | Intensity
+    | ParamValue
 )
 
 MESSAGES: dict[int, type[Message]] = {
@@ -678,6 +842,7 @@ MESSAGES: dict[int, type[Message]] = {
     MessageType.PING: Ping,
     MessageType.IDENTIFY: Identify,
     MessageType.SET_ID: SetId,
+    MessageType.SERVO_HOLD: ServoHold,
     MessageType.STATUS: Status,
     MessageType.INTENSITY: Intensity,
     MessageType.PARAM_VALUE: ParamValue,

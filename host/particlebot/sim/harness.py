@@ -214,6 +214,13 @@ class ParticleSim:
         """Pulls D2 low (asserted) or lets it go high; only particle-faults.elf looks at it."""
         self.set_pin(*FAULT_PIN, not asserted)
 
+    def usb_touch(self) -> None:
+        """What the Arduino core's USB code does when a host closes the port it opened at 1200
+        baud: the bootloader's key in RAM and the watchdog set to 120 ms, expecting a reset into
+        the bootloader. (simavr has no USB; the emulated chip has no bootloader, so the firmware
+        simply starts again.)"""
+        self._send("usb-touch")
+
     # ---- outputs -----------------------------------------------------------------------------
 
     def forget(self) -> None:

@@ -52,11 +52,12 @@ class VirtualAir:
         self._nodes.append(node)
         return node.id
 
-    def write(self, node_id: int, data: bytes, now: float) -> None:
-        """Bytes a host writes to its radio's serial port at time now."""
-        if not data:
-            return
+    def write(self, node_id: int, data: bytes, now: float) -> float:
+        """Bytes a host writes to its radio's serial port at time now; returns when the last of
+        them has reached the radio (the host's serial line is busy until then)."""
         node = self._nodes[node_id]
+        if not data:
+            return max(now, node.uart_free_at)
         start = max(now, node.uart_free_at)
         if node.airs_at is not None and node.airs_at <= start:
             self._air(node, bytes(node.pending), node.airs_at)
@@ -69,6 +70,7 @@ class VirtualAir:
                 node.pending.clear()
         node.uart_free_at = start
         node.airs_at = start + PACKETIZATION_GAP_S if node.pending else None
+        return start
 
     def advance(self, now: float) -> None:
         """Airs every packet due by now and delivers every arrival due by now, in time order."""

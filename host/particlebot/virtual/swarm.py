@@ -33,7 +33,10 @@ class FirmwareParticle(Protocol):
 
     def tick(self, now_ms: int) -> None: ...
 
-    def transmit(self) -> bytes: ...
+    def transmit_frame(self) -> bytes: ...
+
+    @property
+    def inter_frame_gap_ms(self) -> int: ...
 
     @property
     def id(self) -> int: ...
@@ -86,6 +89,8 @@ class _Member:
     x: float
     y: float
     adc_x: float = math.nan
+    serial_free_at: float = 0.0
+    """When the particle may hand its radio the next frame (after the last one's quiet gap)."""
 
 
 class VirtualSwarm(Paced):
@@ -184,14 +189,24 @@ class VirtualSwarm(Paced):
             self.air.write(self._base_node, data, self.t)
         for member in self.members:
             member.firmware.tick(now_ms & 0xFFFFFFFF)
-            out = member.firmware.transmit()
-            if out:
-                self.air.write(member.node, out, self.t)
+            self._transmit(member)
         self.air.advance(self.t)
         if self.config.kinematics and self.steps % KINEMATICS_EVERY == 0:
             self._move()
         if self.steps % 10 == 0:
             self._take_snapshot()
+
+    def _transmit(self, member: _Member) -> None:
+        """Hands the particle's radio its next frame the way main.cpp does: one whole frame, then
+        the serial line stays quiet for the firmware's inter-frame gap after its last byte, so the
+        XBee sends every frame as an RF packet of its own. (Handing over everything queued at once
+        put two frames into one packet, and cut two STATUS frames apart at 100 bytes.)"""
+        if self.t < member.serial_free_at:
+            return
+        frame = member.firmware.transmit_frame()
+        if frame:
+            sent = self.air.write(member.node, frame, self.t)
+            member.serial_free_at = sent + member.firmware.inter_frame_gap_ms / 1000
 
     def run_for(self, seconds: float) -> None:
         for _ in range(round(seconds / STEP_S)):

@@ -100,8 +100,12 @@ class FailingParticle:
             raise RuntimeError("particle logic crashed")
         self.inner.tick(now_ms)
 
-    def transmit(self) -> bytes:
-        return self.inner.transmit()
+    def transmit_frame(self) -> bytes:
+        return self.inner.transmit_frame()
+
+    @property
+    def inter_frame_gap_ms(self) -> int:
+        return self.inner.inter_frame_gap_ms
 
     @property
     def id(self) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -15,6 +16,10 @@ RADIO_HELP = (
     "emulated://5?loss=0.2 (the real firmware image in simavr; needs `make firmware harness`); "
     "default $PARTICLEBOT_RADIO"
 )
+
+
+# Subcommands whose modules add their own parser (their heavy imports wait for run()).
+SELF_REGISTERING = ("track", "stats", "render")
 
 
 def _radio_options(parser: argparse.ArgumentParser) -> None:
@@ -69,11 +74,15 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--no-ui", action="store_true", help="print a summary, no live console")
     demo.add_argument("--no-log", action="store_true", help="do not write a session log")
     _log_options(demo)
+    for name in SELF_REGISTERING:
+        importlib.import_module(f"particlebot.commands.{name}").add_parser(commands)
     return parser
 
 
 def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
     # Each subcommand's module is imported only when used, so `export` never loads Textual.
+    if command in SELF_REGISTERING:
+        return importlib.import_module(f"particlebot.commands.{command}").run
     if command == "console":
         from particlebot.commands.console import run
     elif command == "log":

@@ -228,12 +228,15 @@ def find_checkerboard(image: npt.NDArray[np.uint8], inner_corners: tuple[int, in
     so that columns run with image x and rows with image y. GeometryError if not found."""
     gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     cols, rows = inner_corners
-    found, corners = cv2.findChessboardCornersSB(gray, (cols, rows), flags=cv2.CALIB_CB_ACCURACY)
-    if not found:
-        found, corners = cv2.findChessboardCorners(gray, (cols, rows))
-        if found:
-            criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.01)
-            corners = cv2.cornerSubPix(gray, corners, (5, 5), (-1, -1), criteria)
+    # The classic detector is quick on a clean board (and, with FAST_CHECK, quick to say there
+    # is none); the sector-based one copes with blur and noise where it fails.
+    flags = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+    found, corners = cv2.findChessboardCorners(gray, (cols, rows), flags=flags)
+    if found:
+        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.01)
+        corners = cv2.cornerSubPix(gray, corners, (5, 5), (-1, -1), criteria)
+    else:
+        found, corners = cv2.findChessboardCornersSB(gray, (cols, rows))
     if not found:
         raise GeometryError(
             f"no checkerboard with {cols}x{rows} inner corners found in the picture "

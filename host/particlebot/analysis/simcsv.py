@@ -11,7 +11,6 @@ from __future__ import annotations
 import csv
 import math
 import re
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -130,7 +129,7 @@ def read_published_csv(path: Path) -> PublishedRun:
 def write_published_csv(
     path: Path,
     seed: int,
-    time_s: Sequence[float],
+    time_s: npt.ArrayLike,
     x_m: npt.ArrayLike,
     y_m: npt.ArrayLike,
     r_m: npt.ArrayLike | None = None,
@@ -150,13 +149,13 @@ def write_published_csv(
     with path.open("w", encoding="utf-8", newline="") as stream:
         stream.write(f"Seed, {seed}\n")
         stream.write(", ".join(header) + "\n")
-        for row, t in enumerate(time_s):
-            cells = [t]
+        for row, t in enumerate(np.asarray(time_s, float).ravel()):
+            cells = [float(t)]
             for i in range(count):
-                cells += [xs[row, i], ys[row, i]]
+                cells += [float(xs[row, i]), float(ys[row, i])]
             cells += [0.0] * (2 * count)
             if radii is not None:
-                cells += list(radii[row])
+                cells += [float(r) for r in radii[row]]
             cx, cy = float(xs[row].mean()), float(ys[row].mean())
             distance = 0.0 if light_m is None else math.hypot(cx - light_m[0], cy - light_m[1])
             cells += [cx, cy, distance]

@@ -109,10 +109,22 @@ def trilaterate(points: FloatArray, distances: FloatArray) -> tuple[float, float
     # 2 (p_k - p_0) . L = |p_k|^2 - |p_0|^2 - d_k^2 + d_0^2
     a = 2 * (p[1:] - p[0])
     b = (p[1:] ** 2).sum(axis=1) - (p[0] ** 2).sum() - d[1:] ** 2 + d[0] ** 2
-    singular = np.linalg.svd(a, compute_uv=False)
-    if singular[-1] < 1e-3 * max(singular[0], 1e-12):
+    _, singular, axes = np.linalg.svd(a, full_matrices=False)
+    if singular[0] < 1e-12:
         return None
-    solution, *_ = np.linalg.lstsq(a, b, rcond=None)
+    if singular[-1] >= 1e-3 * singular[0]:
+        solution, *_ = np.linalg.lstsq(a, b, rcond=None)
+    else:
+        # A straight path fixes only how far along it the point lies; the point is placed only
+        # when it lies on the path's line (a swarm heading straight for the lamp), where the
+        # two mirror-image answers meet.
+        direction = axes[0]
+        along = float(np.linalg.lstsq(a @ direction[:, None], b, rcond=None)[0][0])
+        foot = p[0] + (along - float(p[0] @ direction)) * direction
+        off_line = d[0] ** 2 - float(np.sum((foot - p[0]) ** 2))
+        if off_line > (0.01 * d[0]) ** 2:
+            return None
+        solution = foot
     residual = np.abs(np.hypot(*(p - solution).T) - d)
     if float(residual.max()) > 0.01 * max(float(d.max()), 1e-9) + 1e-6:
         return None

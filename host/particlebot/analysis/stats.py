@@ -149,8 +149,9 @@ def sample(
     bridged)."""
     t, v = t_s[valid], values[valid]
     if window_s > 0:
+        # Half-open windows, so a window of exactly one cycle holds exactly one cycle of rows.
         lo = np.searchsorted(t, times - window_s / 2, side="left")
-        hi = np.searchsorted(t, times + window_s / 2, side="right")
+        hi = np.searchsorted(t, times + window_s / 2, side="left")
         sums = np.concatenate([[0.0], np.cumsum(v)])
         counts = hi - lo
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -188,7 +189,10 @@ def analyse(series: CentroidSeries, settings: StatsSettings) -> StatsResult:
         interval = float(math.ceil(spacing / interval) * interval)
         notes.append(f"rows are {spacing:g} s apart: sampled every {interval:g} s instead")
     t_valid = series.t_s[valid]
-    times = np.arange(t_valid[0], t_valid[-1] + 1e-9, interval)
+    # With averaging, the first and last windows must lie inside the data: a window cut short
+    # at the start would lean toward wherever the swarm was in its first half-cycle.
+    half = settings.average_s / 2
+    times = np.arange(t_valid[0] + half, t_valid[-1] - half + 1e-9, interval)
     if len(times) < 3:
         raise SourceError(
             f"{series.name}: {t_valid[-1] - t_valid[0]:.0f} s of usable data gives fewer than "

@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     corners = [(0.0, 0.0), (285.0, 0.0), (285.0, 160.0), (0.0, 160.0)]
     pixels = camera.project(corners)
     points = " ".join(
-        f"--point {u:.1f},{v:.1f}={x:g},{y:g}"
+        f"--point={u:.1f},{v:.1f}={x:g},{y:g}"
         for (u, v), (x, y) in zip(pixels, corners, strict=True)
     )
     if any(tilt):

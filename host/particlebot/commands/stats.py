@@ -105,10 +105,12 @@ def print_table(results: list[StatsResult]) -> None:
         print("  ".join(c.ljust(w) for c, w in zip(_cells(result), widths, strict=True)))
 
 
-def _plot_path(result_path: Path, plot_dir: Path | None, name: str) -> Path:
-    stem = name.replace("/", "_").rsplit(".", 1)[0]
-    folder = plot_dir if plot_dir is not None else result_path.parent
-    return folder / f"{stem}.stats.png"
+def _plot_path(source: Path, plot_dir: Path | None, name: str) -> Path:
+    """Beside the source as SOURCE.stats.png; in --plot-dir named after the row, which says the
+    run folder too."""
+    if plot_dir is None:
+        return source.with_suffix(".stats.png")
+    return plot_dir / f"{name.replace('/', '_').rsplit('.', 1)[0]}.stats.png"
 
 
 def run(args: argparse.Namespace) -> int:

@@ -47,7 +47,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         action="append",
         default=[],
         metavar="U,V=X,Y",
-        help="a marked floor point: pixel U,V is floor X,Y cm; 4 or more replace --field",
+        help="a marked floor point: pixel U,V is floor X,Y cm; 4 or more replace --field "
+        "(write --point=U,V=X,Y when U or V is negative)",
     )
     where.add_argument("--checkerboard", metavar="PICTURE", help="picture of a board on the floor")
     where.add_argument("--board", default="9x6", help="its inner corners, columns x rows (9x6)")

@@ -5,6 +5,7 @@ contact sheet of a dozen such frames spread evenly over the run."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -139,39 +140,57 @@ class Overlay:
 
 
 class ContactSheet:
-    """Keeps `panels` annotated thumbnails spread evenly over a run of unknown length: every
-    stride-th frame is kept, and when twice too many are kept every other one is dropped and
-    the stride doubles."""
+    """Annotated thumbnails spread evenly over the run, its last frame always the last panel.
 
-    def __init__(self, panels: int = 12, columns: int = 3, thumb_width: int = 480) -> None:
+    With the number of analysed frames known (the container says), the panels are chosen in
+    advance; otherwise every stride-th frame is kept and, when twice too many are kept, every
+    other one is dropped and the stride doubles."""
+
+    def __init__(
+        self, expected: int = 0, panels: int = 12, columns: int = 3, thumb_width: int = 480
+    ) -> None:
         self.panels = panels
         self.columns = columns
         self.thumb_width = thumb_width
-        self._kept: list[Image] = []
+        self._targets = (
+            {round(v) for v in np.linspace(0, expected - 1, panels)} if expected > 0 else None
+        )
+        self._kept: list[tuple[int, Image]] = []
         self._stride = 1
-        self._seen = 0
 
-    def wants_next(self) -> bool:
-        """Whether the next frame is kept: draw it and offer() it, else skip()."""
-        return self._seen % self._stride == 0
+    def wants(self, ordinal: int) -> bool:
+        """Whether the ordinal-th analysed frame becomes a panel: draw it and offer() it."""
+        if self._targets is not None:
+            return ordinal in self._targets
+        return ordinal % self._stride == 0
 
-    def skip(self) -> None:
-        self._seen += 1
-
-    def offer(self, drawn: Image) -> None:
-        self._seen += 1
+    def offer(self, ordinal: int, drawn: Image) -> None:
         height = round(drawn.shape[0] * self.thumb_width / drawn.shape[1])
         thumb = cv2.resize(drawn, (self.thumb_width, height), interpolation=cv2.INTER_AREA)
-        self._kept.append(as_image(thumb))
-        if len(self._kept) >= 2 * self.panels:
+        self._kept.append((ordinal, as_image(thumb)))
+        if self._targets is None and len(self._kept) >= 2 * self.panels:
             self._kept = self._kept[::2]
             self._stride *= 2
+
+    def end(self, last_ordinal: int, draw_last: Callable[[], Image]) -> None:
+        """Makes the run's last frame the last panel (the container may have miscounted)."""
+        if self._kept and self._kept[-1][0] == last_ordinal:
+            return
+        picks = self._picks()
+        if len(picks) >= self.panels:
+            self._kept.remove(picks[-1])
+        self.offer(last_ordinal, draw_last())
+
+    def _picks(self) -> list[tuple[int, Image]]:
+        if len(self._kept) <= self.panels:
+            return list(self._kept)
+        chosen = np.linspace(0, len(self._kept) - 1, self.panels)
+        return [self._kept[round(i)] for i in chosen]
 
     def write(self, path: Path, title: str) -> None:
         if not self._kept:
             raise VideoError("no frames for a contact sheet")
-        picks = np.linspace(0, len(self._kept) - 1, min(self.panels, len(self._kept)))
-        thumbs = [self._kept[round(i)] for i in picks]
+        thumbs = [thumb for _, thumb in self._picks()]
         rows = math.ceil(len(thumbs) / self.columns)
         th, tw = thumbs[0].shape[:2]
         banner = 36

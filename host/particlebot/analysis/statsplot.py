@@ -29,23 +29,24 @@ def plot_stats(result: StatsResult, path: Path) -> Path:
         label=f"every {result.interval_s:g} s",
     )
     track_axes.plot([0], [0], "ks", ms=6, label="start (origin)")
-    reach = float(np.nanmax(np.abs(np.concatenate([result.track_x_cm, result.track_y_cm, [1.0]]))))
-    arrow = min(result.lamp_distance_cm, 0.8 * reach + 5)
-    track_axes.annotate(
-        f"lamp, {result.lamp_distance_cm:.0f} cm",
-        xy=(0, arrow),
-        xytext=(0, 0),
-        arrowprops={"arrowstyle": "->", "color": "goldenrod", "lw": 1.5},
+    reach = float(np.nanmax(np.abs(np.concatenate([result.track_x_cm, result.track_y_cm]))))
+    if result.lamp_distance_cm <= 1.2 * reach:
+        track_axes.plot([0], [result.lamp_distance_cm], "*", color="goldenrod", ms=14, label="lamp")
+    track_axes.text(
+        0.03,
+        0.97,
+        f"lamp: +y, {result.lamp_distance_cm:.0f} cm from the start",
+        transform=track_axes.transAxes,
+        va="top",
         color="darkgoldenrod",
-        ha="center",
-        va="bottom",
+        fontsize=9,
     )
     track_axes.set_aspect("equal", adjustable="datalim")
     track_axes.set_xlabel("x (cm), lamp's right")
     track_axes.set_ylabel("y (cm), toward the lamp")
     track_axes.set_title(f"{result.name}: centroid, lamp on +y")
     track_axes.grid(alpha=0.3)
-    track_axes.legend(loc="best", fontsize=8)
+    track_axes.legend(loc="lower right", fontsize=8)
 
     speeds = result.speeds_mm_s
     colours = ["tab:green" if v >= 0 else "tab:red" for v in speeds]

@@ -77,6 +77,8 @@ class BlobSpec:
     """Amplitude of each particle's own wandering."""
     cycle_s: float = 3.0
     """T, one expansion and contraction (eq. 4)."""
+    wave_size: int | None = None
+    """N of eq. 3's pause (N - 1) T/2; None: the number of distinct S_n."""
     duration_s: float = 60.0
     fps: float = 5.0
     seed: int = 1
@@ -130,7 +132,8 @@ def breathing_blob(spec: BlobSpec) -> list[SwarmFrame]:
 
     distance = np.hypot(*(positions(0.0) - lamp).T)
     s_n = 1 + np.floor((distance - distance.min()) / d_min).astype(int)
-    period = spec.cycle_s * (1 + (int(s_n.max()) - 1) / 2)
+    wave = int(s_n.max()) if spec.wave_size is None else spec.wave_size
+    period = spec.cycle_s * (1 + (wave - 1) / 2)
     delay = (s_n - 1) * spec.cycle_s / 2
     frames = []
     for k in range(max(1, round(spec.duration_s * spec.fps) + 1)):

@@ -221,23 +221,25 @@ def _track(
     step = 1 if args.rate == 0 else max(1, round(source.fps / args.rate))
     tracker = SwarmTracker(geometry, settings)
     overlay = Overlay(geometry)
-    sheet = None if sheet_path is None else ContactSheet()
+    expected = -(-source.frame_count // step) if source.frame_count > 0 else 0
+    sheet = None if sheet_path is None else ContactSheet(expected)
     writer = None
     if args.overlay:
         writer = VideoWriter(Path(args.overlay), source.fps / step, source.size)
+    last: list[tuple[int, Image, Detection]] = []
 
     def on_frame(frame: Image, detection: Detection, tracker: SwarmTracker) -> None:
+        ordinal = last[0][0] + 1 if last else 0
+        last[:] = [(ordinal, frame, detection)]
         overlay.note(detection)
-        want_sheet = sheet is not None and sheet.wants_next()
-        if writer is None and not want_sheet:
-            if sheet is not None:
-                sheet.skip()
+        panel = sheet is not None and sheet.wants(ordinal)
+        if writer is None and not panel:
             return
         drawn = overlay.draw(frame, detection, tracker)
         if writer is not None:
             writer.write(drawn)
-        if sheet is not None:
-            sheet.offer(drawn)
+        if sheet is not None and panel:
+            sheet.offer(ordinal, drawn)
 
     bar = ProgressBar(f"track {source.path.name}", source.frame_count)
     try:
@@ -246,6 +248,9 @@ def _track(
         bar.finish()
         if writer is not None:
             writer.close()
+    if sheet is not None and last:
+        ordinal, frame, detection = last[0]
+        sheet.end(ordinal, lambda: overlay.draw(frame, detection, tracker))
     meta = _metadata(source, geometry, result, step)
     # Ctrl-C keeps what was tracked: a long video stopped near its end is still worth its CSV.
     if result.interrupted:

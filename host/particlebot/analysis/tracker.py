@@ -59,7 +59,9 @@ class TrackerSettings:
     contrast_noise_factor: float = 4.0
     """Foreground stands this many noise sigmas above the local floor..."""
     min_contrast: float = 4.0
-    """...and at least this many grey levels."""
+    """...and at least this many grey levels..."""
+    relative_contrast: float = 0.15
+    """...and this part of the floor's own brightness there (the lamp's glow included)."""
     edge_cover: float = 0.25
     """A region counts when its edge pixels add up to this part of an equal-area circle's rim."""
     background_cm: float = 1.5 * 2 * R_MAX_CM
@@ -134,6 +136,9 @@ class SwarmTracker:
         self._background_px = s.background_cm * self.px_per_cm
         close_px = max(3, round(s.close_cm * self.px_per_cm)) | 1
         self._close_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close_px, close_px))
+        reach_px = max(3, round(s.particle_diameter_cm / 2 * self.px_per_cm)) | 1
+        # A square (separable, fast) is as good as a disc for "near".
+        self._reach_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (reach_px, reach_px))
         particle_area_cm2 = math.pi * (s.particle_diameter_cm / 2) ** 2
         self._min_area_cm2 = s.min_area_fraction * particle_area_cm2
         self._static_mask = np.zeros((self.size[1], self.size[0]), np.uint8)
@@ -173,7 +178,9 @@ class SwarmTracker:
         polygon = np.round(geometry.to_image(ring)).astype(np.int32)
         cv2.fillPoly(mask, [polygon], 255)
 
-    def _find_lamps(self, smooth: npt.NDArray[np.float32], foreground: Mask) -> None:
+    def _find_lamps(self, image: Image) -> None:
+        """On the first frame: the lamp's head (given, or the largest burnt-out blobs) and the
+        mask over it."""
         s = self.settings
         self._lamp_ready = True
         if s.lamp == "none":
@@ -186,57 +193,69 @@ class SwarmTracker:
                 Lamp((float(centre[0]), float(centre[1])), radius, (s.lamp.x_cm, s.lamp.y_cm), True)
             )
             return
+        smooth, _, _ = self.foreground(image)
         saturated = (smooth >= s.saturation).astype(np.uint8)
         count, _, stats, centres = cv2.connectedComponentsWithStats(saturated)
         min_area = math.pi * (1.5 * self.px_per_cm) ** 2
-        height, width = foreground.shape
-        vv, uu = np.mgrid[0:height, 0:width]
-        found = []
-        for label in range(1, count):
-            area = stats[label, cv2.CC_STAT_AREA]
-            if area < min_area:
-                continue
-            cx, cy = centres[label]
+        cores = [
+            (float(stats[k, cv2.CC_STAT_AREA]), float(centres[k][0]), float(centres[k][1]))
+            for k in range(1, count)
+            if stats[k, cv2.CC_STAT_AREA] >= min_area
+        ]
+        _, edges, _ = self.foreground(image)
+        for area, cx, cy in sorted(cores, reverse=True):
             core = math.sqrt(area / math.pi)
-            # Grow the mask over the head and its glow: out to the first ring that is mostly
-            # floor (a swarm beside the lamp fills only part of any ring).
+            # The mask covers the head out to its outermost rim: the last ring that is mostly
+            # edges before a stretch of floor as wide as the core (a swarm beside the lamp
+            # fills only part of any ring).
             window = int(8 * core + 10)
-            x0, x1 = max(0, int(cx) - window), min(width, int(cx) + window + 1)
-            y0, y1 = max(0, int(cy) - window), min(height, int(cy) + window + 1)
-            distance = np.hypot(uu[y0:y1, x0:x1] - cx, vv[y0:y1, x0:x1] - cy)
-            lit = foreground[y0:y1, x0:x1] > 0
-            radius = float(window)
+            distance, (x0, y0, x1, y1) = self._distances(cx, cy, window)
+            sharp = edges[y0:y1, x0:x1] > 0
+            radius = core
             for rho in np.arange(core, window, 1.0):
                 ring = (distance >= rho) & (distance < rho + 1.5)
-                if ring.any() and lit[ring].mean() < 0.5:
-                    radius = float(rho)
+                if ring.any() and sharp[ring].mean() >= 0.4:
+                    radius = float(rho) + 1.5
+                elif rho - radius > max(core, 2 * self.px_per_cm):
                     break
             radius += max(2.0, 0.5 * self.px_per_cm)
-            found.append((area, cx, cy, radius))
-        for _, cx, cy, radius in sorted(found, reverse=True):
             cv2.circle(self._lamp_mask, (round(cx), round(cy)), math.ceil(radius), 255, -1)
             fx, fy = self._lamp_geometry().to_floor([[cx, cy]])[0]
-            self.lamps.append(Lamp((float(cx), float(cy)), radius, (float(fx), float(fy)), False))
+            self.lamps.append(Lamp((cx, cy), radius, (float(fx), float(fy)), False))
+
+    def _distances(
+        self, cx: float, cy: float, reach: int
+    ) -> tuple[npt.NDArray[np.float64], tuple[int, int, int, int]]:
+        """Pixel distances from (cx, cy) over the window of that reach, and the window."""
+        width, height = self.size
+        x0, x1 = max(0, int(cx) - reach), min(width, int(cx) + reach + 1)
+        y0, y1 = max(0, int(cy) - reach), min(height, int(cy) + reach + 1)
+        vv, uu = np.mgrid[y0:y1, x0:x1]
+        return np.hypot(uu - cx, vv - cy), (x0, y0, x1, y1)
 
     # -- one frame --------------------------------------------------------------------------------
 
-    def foreground(self, image: Image) -> tuple[npt.NDArray[np.float32], Mask, Mask]:
-        """(smoothed grey image, edge mask, foreground mask) of a processing-size frame.
-
-        Edges are gradients well above the floor's noise; the foreground is what stands out from
-        the local floor (a grey opening wider than any particle estimates the floor and the
-        lamp's glow beneath it) or is an edge. Thresholds come from each frame's own statistics,
-        so exposure changes and compression do not need new settings."""
-        s = self.settings
+    def _grey(self, image: Image) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """(softly smoothed, raw) grey levels of a processing-size frame."""
         grey = np.asarray(
             cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image, np.float32
         )
+        return np.asarray(cv2.GaussianBlur(grey, (0, 0), 2 * self._sigma_px), np.float32), grey
+
+    def foreground(self, image: Image) -> tuple[npt.NDArray[np.float32], Mask, Mask]:
+        """(smoothed grey image, edges, bright) of a processing-size frame.
+
+        Edges are gradients well above the floor's noise; bright is what stands out from the
+        local floor (a grey opening wider than any particle estimates the floor and the lamp's
+        glow on it). Thresholds come from each frame's own statistics, so exposure changes and
+        compression need no new settings."""
+        s = self.settings
+        soft, grey = self._grey(image)
         sharp = np.asarray(cv2.GaussianBlur(grey, (0, 0), self._sigma_px), np.float32)
         gx = cv2.Scharr(sharp, cv2.CV_32F, 1, 0, scale=1 / 32)
         gy = cv2.Scharr(sharp, cv2.CV_32F, 0, 1, scale=1 / 32)
         magnitude = np.asarray(cv2.magnitude(gx, gy), np.float32)
         edges = magnitude > max(s.min_edge, _robust_level(magnitude, s.edge_noise_factor))
-        soft = cv2.GaussianBlur(grey, (0, 0), 2 * self._sigma_px)
         # The opening runs on a shrunk copy: the floor's shading is smooth, and a kernel the size
         # of a few particles is slow at full resolution.
         width, height = self.size
@@ -252,18 +271,27 @@ class SwarmTracker:
             interpolation=cv2.INTER_LINEAR,
         )
         lift = np.asarray(soft - floor, np.float32)
-        bright = lift > max(s.min_contrast, _robust_level(lift, s.contrast_noise_factor))
-        edge_mask = as_image(edges.astype(np.uint8) * 255)
-        return sharp, edge_mask, as_image((bright | edges).astype(np.uint8) * 255)
+        # The floor's texture and the camera's noise grow with its brightness: near the lamp a
+        # contrast that stands out on the dark floor is only the cloth's weave.
+        level = max(s.min_contrast, _robust_level(lift, s.contrast_noise_factor))
+        bright = lift > np.maximum(level, s.relative_contrast * floor)
+        return (
+            sharp,
+            as_image(edges.astype(np.uint8) * 255),
+            as_image(bright.astype(np.uint8) * 255),
+        )
 
     def detect(self, frame: Image, t_s: float, index: int) -> Detection:
         image = self.prepare(frame)
-        smooth, edges, foreground = self.foreground(image)
         if not self._lamp_ready:
-            self._find_lamps(smooth, foreground)
+            self._find_lamps(image)
+        _, edges, bright = self.foreground(image)
         blocked = cv2.bitwise_or(self._lamp_mask, self._static_mask)
-        foreground[blocked > 0] = 0
         edges[blocked > 0] = 0
+        # Brightness only fills in near edges (a dim particle's broken rim): the floor's glow
+        # and glare are bright too, but far from any sharp rim.
+        near_edges = cv2.dilate(edges, self._reach_kernel)
+        foreground = cv2.bitwise_or(edges, cv2.bitwise_and(bright, near_edges))
         closed = cv2.morphologyEx(foreground, cv2.MORPH_CLOSE, self._close_kernel)
         # Only what has sharp rims is swarm: soft glare and the cloth's mottle stand out from
         # the floor too, but have next to no edges.

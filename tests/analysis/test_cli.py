@@ -9,6 +9,8 @@ import cv2
 import numpy as np
 import pytest
 
+from particlebot.analysis.simcsv import write_published_csv
+from particlebot.analysis.synthetic import BlobSpec, breathing_blob
 from particlebot.analysis.trackfile import read_track
 from particlebot.cli import main
 from tests.analysis.conftest import Clip
@@ -150,3 +152,52 @@ def test_render_writes_a_video_its_truth_and_how_to_track_it(
     assert (tmp_path / "blob.truth.csv").read_text().splitlines()[0].startswith("t_s,mean_x_cm")
     assert main(["render", "-o", str(tmp_path / "x.gif")]) == 2
     assert "write videos as .mp4 or .avi" in capsys.readouterr().err
+
+
+def test_a_simulator_run_filmed_and_tracked_gives_the_row_its_csv_gives(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A run in the published format (metres, y up), light in a config file beside it.
+    spec = BlobSpec(
+        duration_s=240, fps=0.5, speed_mm_s=2.0, seed=2, start_cm=(150, 80), lamp_cm=(20, 30)
+    )
+    frames = breathing_blob(spec)
+    folder = tmp_path / "run-2"
+    folder.mkdir()
+    write_published_csv(
+        folder / "run.csv",
+        2,
+        [f.t_s for f in frames],
+        np.array([f.x_cm / 100 for f in frames]),
+        np.array([-f.y_cm / 100 for f in frames]),
+        np.array([f.r_cm / 100 for f in frames]),
+        light_m=(0.2, -0.3),
+    )
+    (folder / "config.txt").write_text("light_x\n0.2\nlight_y\n-0.3\n")
+    video = tmp_path / "filmed.avi"
+    assert main(["render", str(folder), "-o", str(video), "--size", "640x360", "--fps", "0.5"]) == 0
+    assert main(["track", str(video), "--rate", "0", "--no-sheet"]) == 0
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "stats",
+                str(folder),
+                str(tmp_path / "filmed.track.csv"),
+                "--no-plot",
+                "--cycle-s",
+                "9",
+            ]
+        )
+        == 0
+    )
+    rows = [
+        line.split()
+        for line in capsys.readouterr().out.splitlines()
+        if "  track  " in line or "simulator" in line
+    ]
+    (csv_row,) = [r for r in rows if r[1] == "simulator"]
+    (video_row,) = [r for r in rows if r[1] == "track"]
+    assert csv_row[2] == video_row[2] == "8"  # 4 minutes of 30 s steps
+    assert float(video_row[6]) == pytest.approx(float(csv_row[6]), rel=0.05)  # average mm/s
+    assert float(csv_row[6]) == pytest.approx(2.0, rel=0.1)

@@ -82,6 +82,12 @@ def test_a_simulator_run_is_placed_on_the_field_y_flipped(tmp_path: Path) -> Non
     assert frames[1].x_cm == pytest.approx([150.0, 180.0])
     assert frames[1].y_cm == pytest.approx([70.0, 80.0])  # world y up is picture y down
     assert frames[1].r_cm == pytest.approx([9.0, 9.0])
+    # At a video's frame rate the rows are interpolated, on the run's own clock.
+    every_20_s = frames_from_run(
+        read_published_csv(tmp_path / "run.csv"), Placement((1.0, 2.0), (150.0, 80.0)), fps=0.05
+    )
+    assert [f.t_s for f in every_20_s] == pytest.approx([0.0, 20.0, 40.0, 60.0])
+    assert every_20_s[1].x_cm == pytest.approx([150.0, 150.0 + 20 + 10 / 3])
     write_published_csv(tmp_path / "bare.csv", 1, [0.0], x[:1], y[:1])
     with pytest.raises(ValueError, match="no per-particle positions and radii"):
         frames_from_run(read_published_csv(tmp_path / "bare.csv"), Placement((0, 0), (0, 0)))

@@ -139,3 +139,17 @@ def test_a_centroid_that_leaps_is_flagged_and_the_swarm_is_followed_not_the_larg
     assert followed.flags == [] and abs(followed.x_cm - first.x_cm) < 1.0
     leapt = tracker.detect(renderer.render(replace(big, t_s=2.0)), 2.0, 2)
     assert "jump" in leapt.flags
+
+
+def test_ctrl_c_keeps_what_was_tracked(paper_clip: Clip) -> None:
+    seen: list[int] = []
+
+    def stop_at_the_fifth(frame: object, detection: object, tracker: object) -> None:
+        seen.append(1)
+        if len(seen) == 5:
+            raise KeyboardInterrupt
+
+    with open_video(paper_clip.path) as source:
+        result = track(source, SwarmTracker(paper_clip.geometry), on_frame=stop_at_the_fifth)
+    assert result.interrupted
+    assert len(result.detections) == 5 and result.frames_read == 5

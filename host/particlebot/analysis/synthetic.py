@@ -161,16 +161,30 @@ class Placement:
         return x, y
 
 
-def frames_from_run(run: PublishedRun, placement: Placement) -> list[SwarmFrame]:
-    """One frame per row of a run with per-particle output (positions and radii)."""
+def frames_from_run(
+    run: PublishedRun, placement: Placement, fps: float | None = None
+) -> list[SwarmFrame]:
+    """One frame per row of a run with per-particle output (positions and radii), or, with fps,
+    frames at that rate with centres and radii interpolated between rows (a video's clock must
+    be regular; sparse rows then glide from one to the next)."""
     if run.x_m is None or run.y_m is None or run.r_m is None:
         raise ValueError(
             f"{run.path.name} has no per-particle positions and radii (turn per-particle "
             "output on in the simulator)"
         )
+    times = run.time_s
+    x_m, y_m, r_m = run.x_m, run.y_m, run.r_m
+    if fps is not None:
+        times = np.arange(run.time_s[0], run.time_s[-1] + 1e-9, 1.0 / fps)
+
+        def resample(table: FloatArray) -> FloatArray:
+            columns = [np.interp(times, run.time_s, table[:, i]) for i in range(table.shape[1])]
+            return np.stack(columns, axis=1)
+
+        x_m, y_m, r_m = resample(x_m), resample(y_m), resample(r_m)
     frames = []
-    for row, t in enumerate(run.time_s):
-        alive = np.isfinite(run.x_m[row]) & np.isfinite(run.y_m[row]) & np.isfinite(run.r_m[row])
-        x, y = placement.to_field(run.x_m[row, alive], run.y_m[row, alive])
-        frames.append(SwarmFrame(float(t), x, y, run.r_m[row, alive] * 100))
+    for row, t in enumerate(times):
+        alive = np.isfinite(x_m[row]) & np.isfinite(y_m[row]) & np.isfinite(r_m[row])
+        x, y = placement.to_field(x_m[row, alive], y_m[row, alive])
+        frames.append(SwarmFrame(float(t - times[0]), x, y, r_m[row, alive] * 100))
     return frames

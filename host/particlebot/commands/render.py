@@ -13,13 +13,15 @@ from particlebot.commands._progress import ProgressBar
 if TYPE_CHECKING:
     from particlebot.analysis.synthetic import SwarmFrame
 
+DEFAULT_LAMP_CM = (55.0, 45.0)
+
 DESCRIPTION = """\
 Renders what the paper's camera would film (225 cm above a 285x160 cm field, optionally tilted):
 each particle a disc of its current radius, a lamp with its glow, floor mottle, stray reflections,
 blur and noise. Writes VIDEO and VIDEO.truth.csv (per frame: the mean of the particles' centres and
 the centroid of the region they cover, floor cm, y down). Without SOURCE the swarm is a made-up
 blob breathing in a phase-delayed wave and drifting toward the lamp; with SOURCE (a simulator CSV
-with per-particle output, or its run folder) one frame per row."""
+with per-particle output, or its run folder) the run, interpolated between its rows at --fps."""
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -37,34 +39,45 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="PITCH,ROLL,YAW",
         help="camera tilt in degrees (0,0,0: straight down, so --field fits)",
     )
-    render.add_argument("--lamp", default="55,45", metavar="X,Y", help="lamp on the field, cm")
+    render.add_argument(
+        "--lamp",
+        metavar="X,Y",
+        help="lamp on the field, cm (default 55,45; for a run, where its light is, if known)",
+    )
     render.add_argument("--noise", type=float, default=3.0, help="sensor noise, grey levels (3)")
     blob = render.add_argument_group("the made-up blob")
     blob.add_argument("--particles", type=int, default=10, help="how many (10)")
     blob.add_argument("--start", default="190,95", metavar="X,Y", help="its centre, field cm")
     blob.add_argument("--speed-mm-s", type=float, default=1.0, help="drift toward the lamp (1)")
     blob.add_argument("--duration-s", type=float, default=180.0, help="length (180 s)")
-    blob.add_argument("--fps", type=float, default=5.0, help="frames per second (5)")
+    render.add_argument(
+        "--fps", type=float, help="frames per second (5 for the blob, 1 for a run, interpolated)"
+    )
     blob.add_argument("--seed", type=int, default=1, help="random seed (1)")
 
 
-def _frames(args: argparse.Namespace, lamp: tuple[float, float]) -> tuple[list[SwarmFrame], float]:
+def _frames(
+    args: argparse.Namespace, lamp: tuple[float, float] | None
+) -> tuple[list[SwarmFrame], float, tuple[float, float] | None]:
+    """The frames, their rate and the lamp's place on the field."""
     from particlebot.analysis import simcsv, sources, synthetic
     from particlebot.analysis.geometry import parse_pair
 
     if args.source is None:
-        if args.particles < 1 or args.duration_s <= 0 or args.fps <= 0:
+        fps = 5.0 if args.fps is None else args.fps
+        if args.particles < 1 or args.duration_s <= 0 or fps <= 0:
             raise ValueError("--particles, --duration-s and --fps must be positive")
+        lamp = lamp if lamp is not None else DEFAULT_LAMP_CM
         spec = synthetic.BlobSpec(
             count=args.particles,
             start_cm=parse_pair(args.start, "--start"),
             lamp_cm=lamp,
             speed_mm_s=args.speed_mm_s,
             duration_s=args.duration_s,
-            fps=args.fps,
+            fps=fps,
             seed=args.seed,
         )
-        return synthetic.breathing_blob(spec), args.fps
+        return synthetic.breathing_blob(spec), fps, lamp
     series = sources.load_source(Path(args.source))[0]
     run = simcsv.read_published_csv(series.path)
     start = run.centroid_m[0]
@@ -72,9 +85,14 @@ def _frames(args: argparse.Namespace, lamp: tuple[float, float]) -> tuple[list[S
     placement = synthetic.Placement(
         (float(start[0]), float(start[1])), parse_pair(args.start, "--start")
     )
-    frames = synthetic.frames_from_run(run, placement)
-    spacing = sources.median_spacing_s(series)
-    return frames, 1.0 if not spacing > 0 else min(30.0, 60.0 / spacing)
+    fps = 1.0 if args.fps is None else args.fps
+    if fps <= 0:
+        raise ValueError("--fps must be positive")
+    frames = synthetic.frames_from_run(run, placement, fps)
+    if lamp is None and series.lamp_cm is not None:
+        lx, ly = placement.to_field(series.lamp_cm[0] / 100, series.lamp_cm[1] / 100)
+        lamp = (float(lx), float(ly))
+    return frames, fps, lamp
 
 
 def run(args: argparse.Namespace) -> int:
@@ -93,8 +111,7 @@ def run(args: argparse.Namespace) -> int:
         tilt = [float(v) for v in args.tilt.split(",")]
         if len(tilt) != 3:
             raise ValueError("--tilt must be PITCH,ROLL,YAW in degrees")
-        lamp = parse_pair(args.lamp, "--lamp")
-        frames, fps = _frames(args, lamp)
+        frames, fps, lamp = _frames(args, parse_pair(args.lamp, "--lamp") if args.lamp else None)
         camera = Camera.paper((width, height), pitch_deg=tilt[0], roll_deg=tilt[1], yaw_deg=tilt[2])
         scene = Scene(camera, lamp_cm=lamp, noise_sigma=args.noise, seed=args.seed)
         bar = ProgressBar(f"render {output.name}", len(frames))
@@ -108,6 +125,7 @@ def run(args: argparse.Namespace) -> int:
     write_truth(truth_path, result.truth)
     print(f"Video: {output} ({result.frames} frames at {fps:g} fps, {width}x{height})")
     print(f"Truth: {truth_path}")
+    print("Lamp: none" if lamp is None else f"Lamp: ({lamp[0]:g}, {lamp[1]:g}) cm on the field")
     corners = [(0.0, 0.0), (285.0, 0.0), (285.0, 160.0), (0.0, 160.0)]
     pixels = camera.project(corners)
     points = " ".join(

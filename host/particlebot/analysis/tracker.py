@@ -125,7 +125,6 @@ class SwarmTracker:
 
     def __init__(self, geometry: FloorGeometry, settings: TrackerSettings | None = None) -> None:
         self.settings = settings or TrackerSettings()
-        self.native_geometry = geometry
         width, height = geometry.image_size
         scale = min(1.0, self.settings.process_width / width)
         self.size = (max(1, round(width * scale)), max(1, round(height * scale)))
@@ -147,6 +146,7 @@ class SwarmTracker:
         self.lamps: list[Lamp] = []
         self._lamp_mask = np.zeros_like(self._static_mask)
         self._lamp_ready = False
+        self._near_lamp: Mask | None = None
         self._last_ok: Detection | None = None
         self._recent_areas: deque[float] = deque(maxlen=25)
 
@@ -193,7 +193,7 @@ class SwarmTracker:
                 Lamp((float(centre[0]), float(centre[1])), radius, (s.lamp.x_cm, s.lamp.y_cm), True)
             )
             return
-        smooth, _, _ = self.foreground(image)
+        smooth, edges, _ = self.foreground(image)
         saturated = (smooth >= s.saturation).astype(np.uint8)
         count, _, stats, centres = cv2.connectedComponentsWithStats(saturated)
         min_area = math.pi * (1.5 * self.px_per_cm) ** 2
@@ -202,7 +202,6 @@ class SwarmTracker:
             for k in range(1, count)
             if stats[k, cv2.CC_STAT_AREA] >= min_area
         ]
-        _, edges, _ = self.foreground(image)
         for area, cx, cy in sorted(cores, reverse=True):
             core = math.sqrt(area / math.pi)
             # The mask covers the head out to its outermost rim: the last ring that is mostly
@@ -336,8 +335,8 @@ class SwarmTracker:
         last = self._last_ok
         if last is None:
             return largest
+        point = self.geometry.to_image([[last.x_cm, last.y_cm]])[0]
         for piece in pieces:
-            point = self.geometry.to_image([[last.x_cm, last.y_cm]])[0]
             if cv2.pointPolygonTest(piece[0], (float(point[0]), float(point[1])), False) >= 0:
                 return piece
         reach = math.sqrt(last.area_cm2 / math.pi) + self.settings.particle_diameter_cm
@@ -363,7 +362,9 @@ class SwarmTracker:
         ):
             detection.flags.append("edge")
         if self.lamps:
-            near_lamp = cv2.dilate(self._lamp_mask, np.ones((5, 5), np.uint8))
+            if self._near_lamp is None:
+                self._near_lamp = as_image(cv2.dilate(self._lamp_mask, np.ones((5, 5), np.uint8)))
+            near_lamp = self._near_lamp
             if near_lamp[points[:, 1], points[:, 0]].any():
                 detection.flags.append("lamp")
         if len(self._recent_areas) >= 3:

@@ -116,26 +116,18 @@ class Overlay:
             text += f"  ({detection.x_cm:.1f}, {detection.y_cm:.1f}) cm"
         font_scale = 0.7 * scale
         origin = (round(10 * scale), round(30 * scale))
-        cv2.putText(
-            image,
-            text,
-            origin,
-            cv2.FONT_HERSHEY_SIMPLEX,
-            font_scale,
-            (0, 0, 0),
-            round(4 * scale),
-            cv2.LINE_AA,
-        )
-        cv2.putText(
-            image,
-            text,
-            origin,
-            cv2.FONT_HERSHEY_SIMPLEX,
-            font_scale,
-            (255, 255, 255),
-            max(1, round(1.5 * scale)),
-            cv2.LINE_AA,
-        )
+        # Dark outline under light letters: legible on the dark floor and on the lamp's glow.
+        for colour, weight in (((0, 0, 0), 4 * scale), ((255, 255, 255), max(1, 1.5 * scale))):
+            cv2.putText(
+                image,
+                text,
+                origin,
+                cv2.FONT_HERSHEY_SIMPLEX,
+                font_scale,
+                colour,
+                round(weight),
+                cv2.LINE_AA,
+            )
         return image
 
 

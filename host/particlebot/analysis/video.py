@@ -6,6 +6,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import Self
 
 import cv2
 import numpy as np
@@ -22,12 +23,30 @@ def as_image(array: object) -> Image:
     return np.asarray(array, dtype=np.uint8)
 
 
+class _Closing:
+    """`with` closes it."""
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
 class VideoError(ValueError):
     """A video that cannot be read or written, said in one line."""
 
 
 @dataclass
-class VideoSource:
+class VideoSource(_Closing):
     """An opened video: its size, frame rate and (estimated) length."""
 
     path: Path
@@ -57,17 +76,6 @@ class VideoSource:
     def close(self) -> None:
         self.capture.release()
 
-    def __enter__(self) -> VideoSource:
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        value: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
-
 
 def open_video(path: Path, fps: float | None = None) -> VideoSource:
     """Opens path and decodes its first frame; VideoError if missing, unreadable or empty.
@@ -96,7 +104,7 @@ def open_video(path: Path, fps: float | None = None) -> VideoSource:
     return VideoSource(path, capture, float(rate), (width, height), max(count, 0), as_image(first))
 
 
-class VideoWriter:
+class VideoWriter(_Closing):
     """Writes BGR frames of one size to .mp4 or .avi."""
 
     def __init__(self, path: Path, fps: float, size: tuple[int, int]) -> None:
@@ -118,14 +126,3 @@ class VideoWriter:
 
     def close(self) -> None:
         self._writer.release()
-
-    def __enter__(self) -> VideoWriter:
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        value: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()

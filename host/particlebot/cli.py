@@ -47,6 +47,10 @@ def message_type(text: str) -> str:
     return name
 
 
+# Subcommands whose modules add their own parser (their heavy imports wait for run()).
+SELF_REGISTERING = ("track", "stats", "render")
+
+
 def _radio_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--radio", default=os.environ.get("PARTICLEBOT_RADIO"), help=RADIO_HELP)
     _log_options(parser)
@@ -155,11 +159,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     # Parsed by particlebot.commands.study itself (main() hands it over): per-study options.
     commands.add_parser("study", help="run one of the paper's simulation studies on Dask")
+
+    for name in SELF_REGISTERING:
+        importlib.import_module(f"particlebot.commands.{name}").add_parser(commands)
     return parser
 
 
 def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
     # Each subcommand's module is imported only when used, so `export` never loads Textual.
+    if command in SELF_REGISTERING:
+        return importlib.import_module(f"particlebot.commands.{command}").run
     if command == "console":
         from particlebot.commands.console import run
     elif command == "log":

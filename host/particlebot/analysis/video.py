@@ -1,0 +1,128 @@
+"""Reading and writing videos (mp4, avi) through OpenCV, with errors a person can act on."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+Image = npt.NDArray[np.uint8]
+
+# What each container gets: mp4v and MJPG are written by every OpenCV build's bundled FFmpeg.
+FOURCC_BY_SUFFIX = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG"}
+
+
+def as_image(array: object) -> Image:
+    """An OpenCV result as the uint8 image it is (no copy); OpenCV's stubs type it loosely."""
+    return np.asarray(array, dtype=np.uint8)
+
+
+class _Closing:
+    """`with` closes it."""
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+class VideoError(ValueError):
+    """A video that cannot be read or written, said in one line."""
+
+
+@dataclass
+class VideoSource(_Closing):
+    """An opened video: its size, frame rate and (estimated) length."""
+
+    path: Path
+    capture: cv2.VideoCapture
+    fps: float
+    size: tuple[int, int]
+    frame_count: int
+    """From the container; 0 when it does not say. Some containers round it."""
+    first: Image
+    """The first frame, read to prove the file decodes."""
+
+    def frames(self, step: int = 1) -> Iterator[tuple[int, Image]]:
+        """(index, frame) of every step-th frame from the first; skipped ones are only grabbed."""
+        yield 0, self.first
+        index = 0
+        while True:
+            for _ in range(step - 1):
+                if not self.capture.grab():
+                    return
+                index += 1
+            ok, frame = self.capture.read()
+            if not ok:
+                return
+            index += 1
+            yield index, as_image(frame)
+
+    def close(self) -> None:
+        self.capture.release()
+
+
+def open_video(path: Path, fps: float | None = None) -> VideoSource:
+    """Opens path and decodes its first frame; VideoError if missing, unreadable or empty.
+    fps overrides a frame rate the container lacks or gets wrong."""
+    if not path.exists():
+        raise VideoError(f"no such video: {path}")
+    if path.is_dir():
+        raise VideoError(f"{path} is a folder, not a video")
+    if path.stat().st_size == 0:
+        raise VideoError(f"{path} is empty (0 bytes)")
+    capture = cv2.VideoCapture(str(path))
+    if not capture.isOpened():
+        capture.release()
+        raise VideoError(f"cannot decode {path}: not a video OpenCV's FFmpeg can read")
+    ok, first = capture.read()
+    if not ok or first is None:
+        capture.release()
+        raise VideoError(f"{path} has no frames")
+    container_fps = capture.get(cv2.CAP_PROP_FPS)
+    rate = fps if fps is not None else container_fps
+    if not rate or not np.isfinite(rate) or rate <= 0 or rate > 1000:
+        capture.release()
+        raise VideoError(f"{path} does not say its frame rate; give it with --fps")
+    count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+    height, width = first.shape[:2]
+    return VideoSource(path, capture, float(rate), (width, height), max(count, 0), as_image(first))
+
+
+class VideoWriter(_Closing):
+    """Writes BGR frames of one size to .mp4 or .avi."""
+
+    def __init__(self, path: Path, fps: float, size: tuple[int, int]) -> None:
+        fourcc = FOURCC_BY_SUFFIX.get(path.suffix.lower())
+        if fourcc is None:
+            raise VideoError(f"write videos as .mp4 or .avi, not {path.name}")
+        if not path.parent.is_dir():
+            raise VideoError(f"no such folder for {path}")
+        self.path = path
+        self.size = size
+        self._writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*fourcc), fps, size)
+        if not self._writer.isOpened():
+            raise VideoError(f"cannot write {path}")
+
+    def write(self, frame: Image) -> None:
+        if (frame.shape[1], frame.shape[0]) != self.size:
+            frame = as_image(cv2.resize(frame, self.size, interpolation=cv2.INTER_AREA))
+        self._writer.write(frame)
+
+    def close(self) -> None:
+        self._writer.release()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from particlebot.firmware.native import estimate
@@ -149,35 +149,55 @@ def test_linear_estimation_follows_eqs_17_and_18(own: int, others: list[int], gr
     assert estimate(Method.LINEAR, own, others, groups=groups) == expected
 
 
-def nonlinear_index(own: int, others: list[int], groups: int) -> int:
-    """Eqs. 29-30 in floating point, readings clamped to 1..1022."""
+def nonlinear_groups(own: int, others: list[int], groups: int) -> tuple[float, int] | None:
+    """Eqs. 29-30 in floating point: (N_w rho, N_w), or None for a degenerate group. Readings
+    of 0 count as 1 and readings above full scale as 1023 (a distance of 0)."""
 
     def root(v: int) -> float:
-        v = min(max(v, 1), 1022)
+        v = min(max(v, 1), 1023)
         return math.sqrt((1023 - v) / v)
 
     group = [own, *others]
     a, b, c = root(max(group)), root(min(group)), root(own)
     if not others or b <= a:
-        return 1
+        return None
     n_w = groups if groups > 0 else len(group)
-    rho = (c - a) / (b - a)  # eq. 29
-    return 1 + min(math.floor(n_w * rho), n_w - 1)  # eq. 30
+    return n_w * (c - a) / (b - a), n_w  # eqs. 29 and 30
 
 
-@settings(max_examples=300, deadline=None)
-@given(
-    own=st.integers(0, 1023),
-    others=st.lists(st.integers(0, 1023), max_size=32),
-    groups=st.integers(0, 64),
+# Groups of close readings are where rounding the roots shows: a base and small offsets.
+close_groups = st.tuples(st.integers(0, 1023), st.sampled_from([2, 4, 10, 40])).flatmap(
+    lambda t: st.lists(
+        st.integers(0, t[1]).map(lambda k: min(1023, t[0] + k)), min_size=2, max_size=64
+    )
 )
-def test_nonlinear_estimation_follows_eqs_29_and_30_to_one_group(
-    own: int, others: list[int], groups: int
+
+
+@settings(max_examples=600, deadline=None)
+@given(
+    readings=st.one_of(
+        close_groups,
+        st.lists(st.integers(0, 1100), min_size=2, max_size=64),
+        st.tuples(st.integers(1, 1000), st.integers(1, 4), st.integers(2, 64)).map(
+            lambda t: [min(1023, t[0] + t[1] * i) for i in range(t[2])]
+        ),
+    ),
+    pick=st.integers(0, 63),
+    groups=st.sampled_from([0, 64, 33, 7, 1]) | st.integers(0, 64),
+)
+def test_nonlinear_estimation_equals_eqs_29_and_30_off_group_boundaries(
+    readings: list[int], pick: int, groups: int
 ) -> None:
-    # The firmware takes the square roots in 11-bit fixed point, so a particle right on a group
-    # boundary may land in the neighbouring group.
-    expected = nonlinear_index(own, others, groups)
-    assert abs(estimate(Method.NONLINEAR, own, others, groups=groups) - expected) <= 1
+    own = readings[pick % len(readings)]
+    others = readings[: pick % len(readings)] + readings[pick % len(readings) + 1 :]
+    s = estimate(Method.NONLINEAR, own, others, groups=groups)
+    exact = nonlinear_groups(own, others, groups)
+    if exact is None:
+        assert s == 1
+        return
+    x, n_w = exact
+    assume(abs(x - round(x)) >= 1e-3)  # within 1e-3 of a group boundary either side will do
+    assert s == 1 + min(math.floor(x), n_w - 1)
 
 
 def test_nonlinear_estimation_places_a_line_of_particles_exactly() -> None:

@@ -260,7 +260,7 @@ def test_every_epoch_re_estimates_and_starts_contracted(bench: Bench) -> None:
     bench.particle.set_adc([reading_on_floor(0.0)] * 6)
     bench.advance(100)
     t0 = start(bench, method=Method.DIRECT, cycle_steps=25, wave_size=2, update_interval_s=2)
-    epoch = 2000  # max(update interval, round + T + t_p) = max(2000, 200 + 500 + 250)
+    epoch = 2000  # max(update interval, round + T + t_p + T / 2) = max(2000, 200 + 500 + 250 + 250)
     trace = radii(bench, epoch - 300)
     assert bench.status().s_n == 1
     bench.particle.set_adc([reading_on_floor(2 * DIAMETER_M)] * 6)
@@ -291,3 +291,38 @@ def test_phototaxis_stops_when_the_light_no_longer_increases(bench: Bench) -> No
     assert status.radius_um == R_MIN
     bench.send(Ping(target=bench.particle.id))
     assert any(isinstance(f.message, Status) for f in bench.collect())
+
+
+@pytest.mark.parametrize(("rank", "wave", "cycle_steps"), [(9, 1, 300), (8, 2, 150), (6, 4, 150)])
+def test_the_back_of_the_wave_cycles_every_epoch_at_the_shortest_update_interval(
+    bench: Bench, rank: int, wave: int, cycle_steps: int
+) -> None:
+    # Eq. 5's t_I would put these first cycles past the end of a 10 s epoch, every epoch.
+    interval_s = PARAM_SPECS[Param.UPDATE_INTERVAL_S].min
+    bench.particle.set_adc([reading_on_floor((rank - 1) * DIAMETER_M)] * 6)
+    bench.advance(100)
+    t0 = start(
+        bench,
+        method=Method.DIRECT,
+        cycle_steps=cycle_steps,
+        wave_size=wave,
+        update_interval_s=interval_s,
+    )
+    half = cycle_steps * STEP_MS // 2
+    wave_period = (wave + 1) * half  # T + t_p
+    epoch = max(interval_s * 1000, ROUND_MS + (wave + 2) * half)
+    trace: dict[int, int] = {}
+    bench.advance(
+        3 * epoch, step_ms=10, each=lambda t: trace.__setitem__(t, bench.particle.radius_um)
+    )
+    assert bench.status().s_n == rank
+    for k in range(3):
+        begin = t0 + k * epoch
+        common_start = begin + ROUND_MS
+        starts = [s for s in expansion_starts(trace) if begin <= s < begin + epoch]
+        assert starts, f"no cycle in epoch {k}"
+        for s in starts:
+            # The radius leaves R_min one servo step into a cycle; samples are 10 ms apart.
+            since = s - STEP_MS - common_start - (rank - 1) * half
+            assert 0 <= since % wave_period < 10, (k, s)
+        assert trace[begin + epoch - 10] == R_MIN

@@ -5,8 +5,11 @@ namespace pb {
 
 namespace {
 
-// Fixed point with 30 fraction bits: the trig below is exact to ~1e-9, so radii round to the
-// same micrometre as the floating-point formula, and the AVR needs no float library.
+// Fixed point with 30 fraction bits, so the AVR needs no float library. The raised cosine below
+// is within 2.4e-7 of the stroke (0.024 um on the longest stroke the settings allow), so a radius
+// rounded to the micrometre is within 0.53 um of eq. 4 (measured over every step of every cycle
+// length, firmware/test: it rounds the other way from the floating-point formula in about 0.1 %
+// of steps).
 const uint32_t kOne = 1ul << 30;
 
 uint32_t stroke_um(const Geometry &g) {
@@ -27,7 +30,9 @@ uint32_t mul_q30(uint32_t a, uint32_t b) {
 uint32_t raised_cosine_q30(uint32_t num, uint32_t den) {
   if (2 * num > den) num = den - num;  // symmetric about half a turn
   // Angles past a quarter turn use 1 - cos(psi) = 2 - (1 - cos(pi - psi)), so the series below
-  // only sees psi <= pi / 2, where five terms are exact to ~5e-10.
+  // only sees psi <= pi / 2. There five terms leave out u^6 / 12!, 4.7e-7 at psi = pi / 2, which
+  // halved is the 2.4e-7 of the stroke measured at a quarter turn; the Q30 rounding adds ~1e-9.
+  // A sixth term would reach 4e-9 for one more 64-bit division per step, which no servo can show.
   const bool flip = 4 * num > den;
   if (flip) {
     num = den - 2 * num;

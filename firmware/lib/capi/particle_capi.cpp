@@ -190,4 +190,39 @@ size_t pb_parse_stream(const uint8_t *input, size_t input_len, uint8_t *out, siz
   return written;
 }
 
+uint16_t pb_servo_step_ms(void) {
+  return pb::kStepMs;
+}
+
+uint16_t pb_adc_full_scale(void) {
+  return pb::kAdcMax;
+}
+
+uint8_t pb_s_n_max(void) {
+  return pb::kMaxSn;
+}
+
+uint32_t pb_group_count_max(void) {
+  return pb::kMaxGroupCount;
+}
+
+void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint8_t wave_size_param,
+                   uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
+                   uint32_t out[3]) {
+  pb::RunConfig c;
+  c.run_id = 0;
+  c.method = method;
+  c.cycle_steps = cycle_steps;
+  c.wave_size = wave_size;
+  c.wave_size_param = wave_size_param;
+  c.broadcast_repeats = 1;
+  c.phototaxis = false;
+  c.update_interval_ms = update_interval_ms;
+  c.round_ms = round_ms;
+  const pb::EpochPlan plan = pb::plan_epoch(c, s_n, group_size);
+  out[0] = plan.first_cycle_ms;
+  out[1] = plan.pause_ms;
+  out[2] = plan.epoch_ms;
+}
+
 }  // extern "C"

@@ -88,6 +88,25 @@ size_t pb_encode_frame(uint8_t type, uint8_t sender, uint8_t seq, const uint8_t 
 size_t pb_parse_stream(const uint8_t *input, size_t input_len, uint8_t *out, size_t capacity,
                        uint16_t counters[4]);
 
+// ---- firmware constants and the epoch plan, for the vectorised model of the firmware ---------
+
+// Milliseconds per servo step (T = cycle_steps steps).
+uint16_t pb_servo_step_ms(void);
+// Full-scale reading; a sensor whose mean reads it or 0 is taken as faulty.
+uint16_t pb_adc_full_scale(void);
+// The largest S_n any method gives.
+uint8_t pb_s_n_max(void);
+// N_w of methods B and C with GROUPS = 0 is one group per particle, capped at this.
+uint32_t pb_group_count_max(void);
+
+// The epoch a particle plans when its round gives s_n and it heard group_size particles (itself
+// included): out[0] first cycle after the common start, out[1] pause t_p, out[2] epoch length,
+// all in ms. The other arguments are the run's: START's method, cycle_steps and wave_size (0:
+// automatic), the stored WAVE_SIZE, the update interval and ROUND_MS.
+void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint8_t wave_size_param,
+                   uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
+                   uint32_t out[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -178,6 +178,28 @@ Coordinator::Event Coordinator::poll(uint32_t now_ms, bool can_broadcast) {
   }
 }
 
+EpochPlan plan_epoch(const RunConfig &config, uint8_t s_n, uint8_t group_size) {
+  uint8_t n_wave = config.wave_size;
+  if (n_wave == 0) {
+    n_wave =
+        config.method == static_cast<uint8_t>(Method::DIRECT) ? config.wave_size_param : group_size;
+  }
+  if (n_wave == 0) n_wave = 1;
+  if (s_n == 0) s_n = 1;
+  const uint32_t half_period = static_cast<uint32_t>(config.cycle_steps) * (kStepMs / 2);
+  EpochPlan plan;
+  plan.pause_ms = static_cast<uint32_t>(n_wave - 1) * half_period;  // eq. 3
+  // Eq. 5's t_I = (S_n - 1) T / 2 less whole wave periods T + t_p = (N + 1) T / 2: every cycle
+  // keeps eq. 5's phase, and the first starts within one period of the common start.
+  uint8_t delays = static_cast<uint8_t>(s_n - 1);
+  while (delays > n_wave) delays = static_cast<uint8_t>(delays - n_wave - 1);
+  plan.first_cycle_ms = static_cast<uint32_t>(delays) * half_period;
+  // Long enough for the latest first cycle, N T / 2 + T, to end inside the epoch.
+  plan.epoch_ms = config.round_ms + (n_wave + 2u) * half_period;
+  if (config.update_interval_ms > plan.epoch_ms) plan.epoch_ms = config.update_interval_ms;
+  return plan;
+}
+
 void Coordinator::finish_round(const RoundResult &result) {
   if (state() != State::ESTIMATING) return;
   s_n_ = result.s_n == 0 ? 1 : result.s_n;
@@ -185,19 +207,10 @@ void Coordinator::finish_round(const RoundResult &result) {
   const bool brighter = !have_previous_ || result.intensity > previous_intensity_;
   previous_intensity_ = result.intensity;
   have_previous_ = true;
-  uint8_t n_wave = config_.wave_size;
-  if (n_wave == 0) {
-    n_wave = config_.method == static_cast<uint8_t>(Method::DIRECT) ? config_.wave_size_param
-                                                                    : result.group_size;
-  }
-  if (n_wave == 0) n_wave = 1;
-  const uint32_t half_period = static_cast<uint32_t>(config_.cycle_steps) * (kStepMs / 2);
-  pause_ms_ = static_cast<uint32_t>(n_wave - 1) * half_period;  // eq. 3
-  const uint32_t common_start = epoch_start_ms_ + config_.round_ms;
-  next_cycle_ms_ = common_start + static_cast<uint32_t>(s_n_ - 1) * half_period;  // eq. 5
-  uint32_t epoch = config_.round_ms + period_ms() + pause_ms_;
-  if (config_.update_interval_ms > epoch) epoch = config_.update_interval_ms;
-  epoch_end_ms_ = epoch_start_ms_ + epoch;
+  const EpochPlan plan = plan_epoch(config_, s_n_, group_size_);
+  pause_ms_ = plan.pause_ms;
+  next_cycle_ms_ = epoch_start_ms_ + config_.round_ms + plan.first_cycle_ms;  // common start + t_I
+  epoch_end_ms_ = epoch_start_ms_ + plan.epoch_ms;
   // A ramp begun at START may still run (round_ms < 600 ms): it is left to finish either way.
   state_ = state_byte(config_.phototaxis && !brighter ? State::DONE : State::WAITING);
 }

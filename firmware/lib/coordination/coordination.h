@@ -45,12 +45,36 @@ struct RoundResult {
   uint16_t intensity;
 };
 
+// When an epoch's cycles happen, from the estimate of its round (times in ms).
+struct EpochPlan {
+  uint32_t first_cycle_ms;  // after the common start: t_I less whole wave periods
+  uint32_t pause_ms;        // t_p between cycles
+  uint32_t epoch_ms;        // from the round's start to the next round's
+};
+
+// The plan for a particle of estimate s_n (0 counts as 1) that heard group_size particles, itself
+// included, in a run of `config`. N is the START's wave size, or when automatic WAVE_SIZE for
+// method A and group_size otherwise. Pure, so the vectorised model can be checked against it.
+//   t_p = (N - 1) T / 2 (eq. 3); the wave period is T + t_p = (N + 1) T / 2.
+//   First cycle at ((S_n - 1) mod (N + 1)) T / 2 after the common start: eq. 5's t_I less whole
+//   wave periods, so every cycle keeps eq. 5's phase relative to every other particle.
+//   E = max(update interval, round + T + t_p + T / 2): the latest first cycle (N T / 2 + T)
+//   ends inside it, so every particle runs at least one cycle per epoch whatever S_n, T, N and
+//   the interval, as Algorithm 2 does. E depends on N, never on S_n, so particles that heard the
+//   same group keep starting their rounds together.
+// Why not eq. 5 as written: with t_I growing with S_n and cycles confined to a common epoch, the
+// back of a deep wave would wait past the epoch's end and never move (77 of the 324 cases of
+// T = 1.5, 3, 6 s, N and S_n = 1..9 at the protocol's shortest 10 s interval; S_n reaches 255),
+// and lengthening the epoch by S_n would give each particle its own epoch and part the swarm's
+// rounds. Taking t_I modulo the wave period is also how the published simulator phases its
+// particles.
+EpochPlan plan_epoch(const RunConfig &config, uint8_t s_n, uint8_t group_size);
+
 // Timeline of one run, all times from the START receipt t0:
 //   epoch k starts at t0 + sum of earlier epoch lengths, with a round of round_ms;
-//   common start C = epoch start + round_ms; cycle j starts at C + t_I + j (T + t_p) with
-//   t_I = (S_n - 1) T / 2, t_p = (N - 1) T / 2;
-//   epoch length E = max(update interval, round_ms + T + t_p); a cycle only starts if it ends by
-//   the epoch's end, so the body is contracted at every boundary and a new S_n never makes it jump.
+//   common start C = epoch start + round_ms; cycle j starts at C + first_cycle_ms + j (T + t_p)
+//   (see plan_epoch); a cycle only starts if it ends by the epoch's end, so the body is
+//   contracted at every boundary and a new S_n never makes it jump.
 // poll() is a pure function of the stored schedule and now_ms: it can be called at any rate, and a
 // late call catches up through every transition that fell due, each at its exact scheduled time.
 class Coordinator {

@@ -9,21 +9,29 @@ namespace pb {
 namespace {
 
 const uint16_t kFullScale = 1023;
-const uint8_t kMaxIndex = 255;
+const uint8_t kMaxIndex = kMaxSn;
 
 uint8_t saturate_index(uint32_t zero_based) {
   return zero_based >= kMaxIndex ? kMaxIndex : static_cast<uint8_t>(zero_based + 1);
 }
 
-// floor(sqrt(x)), bit by bit: no float library on the AVR.
-uint32_t isqrt(uint32_t x) {
+// floor(sqrt(m) * 2^13) for m < 2^18, two bits of the radicand (m followed by 26 zero bits) per
+// iteration: no float library on the AVR. The remainder stays below twice the root (< 2^23), so
+// everything fits 32 bits. One routine for both uses keeps the flash cost down.
+__attribute__((noinline)) uint32_t sqrt_q13(uint32_t m) {
+  uint32_t x = m << 14;  // the radicand's first bit pair at the top
   uint32_t root = 0;
-  for (uint32_t bit = 1ul << 30; bit != 0; bit >>= 2) {
-    if (x >= root + bit) {
-      x -= root + bit;
-      root = (root >> 1) + bit;
-    } else {
-      root >>= 1;
+  uint32_t rem = 0;
+  for (uint8_t i = 2 * 22; i != 0; --i) {  // 9 pairs from m, 13 zero pairs
+    rem = (rem << 1) | (x >> 31);
+    x <<= 1;
+    if (i & 1) {
+      root <<= 1;
+      const uint32_t trial = (root << 1) | 1;
+      if (rem >= trial) {
+        rem -= trial;
+        root |= 1;
+      }
     }
   }
   return root;
@@ -36,12 +44,11 @@ __attribute__((noinline)) uint32_t wide_quotient(uint32_t a, uint32_t b, uint32_
   return q > 0xFFFFFFFFull ? 0xFFFFFFFFul : static_cast<uint32_t>(q);
 }
 
-// N_w: the GROUPS parameter, or one group per particle in {own} + others. Capped so every
-// product below fits 32 bits; a group that large saturates S_n anyway.
+// N_w: the GROUPS parameter, or one group per particle in {own} + others, capped so every
+// product below fits 32 bits.
 uint32_t group_count(size_t count, int32_t groups) {
   if (groups > 0) return static_cast<uint32_t>(clamp_to_spec(Param::GROUPS, groups));
-  const uint32_t cap = 0xFFFFu;
-  return count >= cap ? cap : static_cast<uint32_t>(count) + 1;
+  return count >= kMaxGroupCount ? kMaxGroupCount : static_cast<uint32_t>(count) + 1;
 }
 
 void extremes(uint16_t own, const uint16_t *others, size_t count, uint16_t *v_max,
@@ -56,13 +63,23 @@ void extremes(uint16_t own, const uint16_t *others, size_t count, uint16_t *v_ma
   *v_min = lo;
 }
 
-// sqrt((1023 - V) / V) = sqrt(R_n / R_R) in fixed point with 11 fraction bits (eqs. 26-28), V
-// clamped to 1..1022: (1023 - V) * 2^22 just fits 32 bits, and the root is proportional to the
-// distance to the lamp.
-uint32_t root_resistance(uint16_t v) {
-  if (v < 1) v = 1;
-  if (v > kFullScale - 1) v = kFullScale - 1;
-  return isqrt((static_cast<uint32_t>(kFullScale - v) << 22) / v);
+// Readings as eqs. 29-30 may use them: 0 (no light: an infinite distance) is taken as 1, and
+// anything above full scale as 1023 (a distance of 0).
+__attribute__((noinline)) uint16_t usable_reading(uint16_t v) {
+  if (v < 1) return 1;
+  return v > kFullScale ? kFullScale : v;
+}
+
+// g(V) = sqrt((1023 - V) V) rounded to 12 fraction bits (the floor with 13, halved), at most
+// 2.1e-6 of itself off for V in 1..1022 and exact for 1023. Since sqrt((1023 - V) / V) is g / V,
+// these give eqs. 26-28's roots.
+uint32_t root_term(uint16_t v) {
+  return (sqrt_q13(static_cast<uint32_t>(kFullScale - v) * v) + 1) >> 1;
+}
+
+// g(V_a) V_b + g(V_b) V_a: the sums of eq. 29 rewritten below.
+__attribute__((noinline)) uint32_t cross_sum(uint16_t v_a, uint16_t v_b) {
+  return root_term(v_a) * v_b + root_term(v_b) * v_a;
 }
 
 }  // namespace
@@ -79,11 +96,11 @@ uint8_t estimate_direct(uint16_t own, const EstimationParams &p) {
   // q = floor(4 D_n^2 / D^2) and z = floor(sqrt(q)) = floor(2 D_n / D), eq. 16 rounded half up is
   // round(D_n / D) = (z + 1) / 2 exactly, in integers (both sides fit 64 bits).
   // Factors: 4 r_x^2 < 2^29, 1023 (V_x - V_n) < 2^20, D^2 < 2^20, V_n (1023 - V_x) < 2^20.
-  const uint32_t q =
-      wide_quotient(4 * r_x * r_x, kFullScale * (v_x - own), d * d, own * (kFullScale - v_x));
+  const uint32_t q = wide_quotient(4 * r_x * r_x, kFullScale * (v_x - own), d * d,
+                                   static_cast<uint32_t>(own) * (kFullScale - v_x));
   const uint32_t saturated = 509ul * 509ul;  // z >= 509 gives S_n >= 256
   if (q >= saturated) return kMaxIndex;
-  return saturate_index((isqrt(q) + 1) / 2);
+  return saturate_index(((sqrt_q13(q) >> 13) + 1) / 2);
 }
 
 uint8_t estimate_linear(uint16_t own, const uint16_t *others, size_t count, int32_t groups) {
@@ -102,13 +119,21 @@ uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count, i
   if (count == 0 || others == NULL) return 1;
   uint16_t v_max, v_min;
   extremes(own, others, count, &v_max, &v_min);
-  const uint32_t a = root_resistance(v_max);
-  const uint32_t b = root_resistance(v_min);
-  if (b <= a) return 1;  // V_max == V_min once clamped
-  const uint32_t c = root_resistance(own);
+  v_max = usable_reading(v_max);
+  v_min = usable_reading(v_min);
+  own = usable_reading(own);
+  if (own >= v_max || v_max == v_min) return 1;  // the brightest, or a uniform group
+  // Eq. 29's rho = (c - a) / (b - a) with a, b, c = g / V of V_max, V_min, V_n. Written as
+  // c - a = 1023 (V_max - V_n) / (V_n V_max (c + a)) and likewise b - a, it becomes
+  //   rho = (V_max - V_n) (g_max V_min + g_min V_max) / ((V_max - V_min) (g_max V_n + g_n V_max)),
+  // which subtracts only exact integers. The roots' rounding moves rho by at most 4.2e-6 of
+  // itself, so N_w rho is exact to 2.7e-4 for every group the firmware can form (N_w <= 64) and to
+  // 1.1e-3 wherever S_n is below its ceiling of 255 (the 11-bit roots of eq. 29 as written were
+  // off by whole groups for close readings). Factors: N_w (V_max - V_n) < 2^26; each sum of two
+  // products stays below 2.8e9 (checked for every pair of readings).
   const uint32_t n_w = group_count(count, groups);
-  // Eq. 30 with eq. 29's rho = (c - a) / (b - a): n_w and c - a are both below 2^16.
-  uint32_t index = n_w * (c - a) / (b - a);
+  uint32_t index = wide_quotient(n_w * (v_max - own), cross_sum(v_max, v_min), v_max - v_min,
+                                 cross_sum(v_max, own));  // eq. 30
   if (index > n_w - 1) index = n_w - 1;
   return saturate_index(index);
 }

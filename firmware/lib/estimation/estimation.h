@@ -7,6 +7,11 @@
 
 namespace pb {
 
+// S_n saturates here: STATUS and the schedule carry it in one byte.
+const uint8_t kMaxSn = 255;
+// N_w with one group per particle (GROUPS 0) is capped here, so the products stay in 32 bits.
+const uint32_t kMaxGroupCount = 0xFFFF;
+
 // Every method returns S_n in 1..255 (saturating), never divides by zero and accepts any input:
 // readings above 1023, empty groups, parameters outside their protocol ranges (clamped to them).
 // An unknown method gives 0. Integer arithmetic only: the AVR build carries no float library.
@@ -27,9 +32,10 @@ uint8_t estimate_direct(uint16_t own, const EstimationParams &p);
 // with dV = (V_max - V_min) / N_w. A group of one, or V_max == V_min, gives 1.
 uint8_t estimate_linear(uint16_t own, const uint16_t *others, size_t count, int32_t groups);
 
-// (C) eqs. 29-30: rho from the square roots of (1023 - V) / V for V_n, V_max, V_min (each clamped
-// to 1..1022, roots to 11 fraction bits), S_n = 1 + min(floor(N_w * rho), N_w - 1). Degenerate
-// groups give 1.
+// (C) eqs. 29-30: rho from the square roots of (1023 - V) / V for V_n, V_max, V_min, S_n =
+// 1 + min(floor(N_w * rho), N_w - 1). Readings of 0 count as 1 and readings above 1023 as 1023
+// (a root of 0: at the lamp). The integer result equals the exact formula wherever N_w * rho is
+// more than 2.5e-4 from a group boundary. The brightest particle and a uniform group give 1.
 uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count, int32_t groups);
 
 // (D) Algorithm 4 with a fixed order: the readings strictly stronger than own, taken strongest

@@ -109,6 +109,67 @@ TEST_CASE("nonlinear estimation recovers positions from an inverse-square field"
   }
 }
 
+// Eqs. 29-30 in double precision: N_w rho, or -1 for a degenerate group.
+double nonlinear_groups(uint16_t own, const uint16_t *others, int count, int groups) {
+  uint16_t hi = own, lo = own;
+  for (int i = 0; i < count; ++i) {
+    hi = others[i] > hi ? others[i] : hi;
+    lo = others[i] < lo ? others[i] : lo;
+  }
+  const double a = sqrt((1023.0 - hi) / hi);
+  const double b = sqrt((1023.0 - lo) / lo);
+  if (b <= a) return -1;
+  const double n_w = groups > 0 ? groups : count + 1;
+  return n_w * (sqrt((1023.0 - own) / own) - a) / (b - a);
+}
+
+TEST_CASE("nonlinear estimation matches eqs. 29-30 for close readings and 64 groups") {
+  // The 11-bit roots put a particle whole groups off here: 31 readings 822..850 (the one at 843
+  // got 9 for the exact 8) and 64 groups over readings 2 counts apart (7 off).
+  for (int spacing = 1; spacing <= 3; ++spacing) {
+    for (int base = 1; base + 40 * spacing <= 1023; base += 7) {
+      uint16_t group[41];
+      for (int i = 0; i < 41; ++i) group[i] = static_cast<uint16_t>(base + spacing * i);
+      const int sizes[] = {31, 41};
+      for (int size : sizes) {
+        for (int i = 0; i < size; ++i) {
+          uint16_t others[40];
+          int n = 0;
+          for (int j = 0; j < size; ++j) {
+            if (j != i) others[n++] = group[j];
+          }
+          const int groups_choices[] = {0, 64};
+          for (int groups : groups_choices) {
+            const double x = nonlinear_groups(group[i], others, n, groups);
+            const int n_w = groups > 0 ? groups : size;
+            if (fabs(x - floor(x + 0.5)) < 1e-3) continue;  // on a group boundary
+            const int expected = 1 + (x >= n_w - 1 ? n_w - 1 : static_cast<int>(floor(x)));
+            CAPTURE(base);
+            CAPTURE(spacing);
+            CAPTURE(group[i]);
+            CHECK(pb::estimate_nonlinear(group[i], others, n, groups) == expected);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("nonlinear estimation takes 1023 as at the lamp and 0 as 1") {
+  const uint16_t others[] = {1022, 900};
+  // 1023 is the brightest possible reading (root 0), no longer the same as 1022.
+  CHECK(pb::estimate_nonlinear(1023, others, 2, 0) == 1);
+  const uint16_t with_full[] = {1023, 900};
+  const double x = nonlinear_groups(1022, with_full, 2, 0);
+  CHECK(x > 0.1);
+  CHECK(pb::estimate_nonlinear(1022, with_full, 2, 0) == 1 + static_cast<int>(floor(x)));
+  const uint16_t over[] = {4000, 900};  // above full scale reads as 1023
+  CHECK(pb::estimate_nonlinear(1022, over, 2, 0) == pb::estimate_nonlinear(1022, with_full, 2, 0));
+  const uint16_t dark[] = {0, 1};  // no light counts as 1: the farthest
+  CHECK(pb::estimate_nonlinear(500, dark, 2, 3) == 1);
+  CHECK(pb::estimate_nonlinear(0, dark + 1, 1, 3) == 1);
+}
+
 TEST_CASE("counting estimation counts distinct stronger levels whatever the arrival order") {
   const uint16_t heard[] = {800, 805, 700, 600, 400};
   CHECK(pb::estimate_counting(500, heard, 5, 10) == 4);  // 805, 700, 600 (800 joins 805)

@@ -375,3 +375,96 @@ def parse_stream(data: bytes | bytearray) -> tuple[list[ParsedFrame], ParseCount
         frames.append(ParsedFrame(raw[i], raw[i + 1], raw[i + 2], raw[i + 4 : i + 4 + length]))
         i += 4 + length
     return frames, ParseCounters(*counters)
+
+
+# ---- firmware constants and the epoch plan, for the vectorised model of the firmware ------------
+
+_MODEL_SIGNATURES: dict[str, tuple[object, list[object]]] = {
+    "pb_servo_step_ms": (ctypes.c_uint16, []),
+    "pb_adc_full_scale": (ctypes.c_uint16, []),
+    "pb_s_n_max": (ctypes.c_uint8, []),
+    "pb_group_count_max": (ctypes.c_uint32, []),
+    "pb_plan_epoch": (
+        None,
+        [
+            ctypes.c_uint8,
+            ctypes.c_uint16,
+            ctypes.c_uint8,
+            ctypes.c_uint8,
+            ctypes.c_uint32,
+            ctypes.c_uint32,
+            ctypes.c_uint8,
+            ctypes.c_uint8,
+            ctypes.POINTER(ctypes.c_uint32),
+        ],
+    ),
+}
+
+
+def _model_library() -> ctypes.CDLL:
+    """The library with the model's functions declared (idempotent, so no lock is needed)."""
+    lib = load_library()
+    for name, (restype, argtypes) in _MODEL_SIGNATURES.items():
+        function = getattr(lib, name)
+        function.restype = restype
+        function.argtypes = argtypes
+    return lib
+
+
+@dataclass(frozen=True)
+class FirmwareConstants:
+    """Values the firmware defines outside the protocol that a model of it needs."""
+
+    servo_step_ms: int  # one servo step; a cycle of cycle_steps steps lasts T
+    adc_full_scale: int  # highest reading; a sensor reading it or 0 is left out as faulty
+    s_n_max: int  # every estimator saturates S_n here
+    group_count_max: int  # cap on N_w of methods B and C with GROUPS = 0
+
+
+def firmware_constants() -> FirmwareConstants:
+    """The constants the library was built with."""
+    lib = _model_library()
+    return FirmwareConstants(
+        servo_step_ms=int(lib.pb_servo_step_ms()),
+        adc_full_scale=int(lib.pb_adc_full_scale()),
+        s_n_max=int(lib.pb_s_n_max()),
+        group_count_max=int(lib.pb_group_count_max()),
+    )
+
+
+@dataclass(frozen=True)
+class EpochPlan:
+    """One epoch of a particle's schedule, in ms (see plan_epoch in coordination.h)."""
+
+    first_cycle_ms: int  # after the common start
+    pause_ms: int  # t_p between cycles
+    epoch_ms: int  # from the round's start to the next round's
+
+
+def plan_epoch(
+    method: Method | int,
+    *,
+    cycle_steps: int,
+    wave_size: int,
+    wave_size_param: int,
+    update_interval_ms: int,
+    round_ms: int,
+    s_n: int,
+    group_size: int,
+) -> EpochPlan:
+    """The firmware's plan for a particle whose round gave s_n after hearing group_size
+    particles (itself included); wave_size 0 is automatic, as in START."""
+    lib = _model_library()
+    out = (ctypes.c_uint32 * 3)()
+    lib.pb_plan_epoch(
+        int(method),
+        cycle_steps,
+        wave_size,
+        wave_size_param,
+        update_interval_ms,
+        round_ms,
+        s_n,
+        group_size,
+        out,
+    )
+    return EpochPlan(int(out[0]), int(out[1]), int(out[2]))

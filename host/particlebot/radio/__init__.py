@@ -188,7 +188,13 @@ def open_radio(url: str) -> Radio:
             "with its dependencies: make venv (or pip install -e .)"
         ) from exc
     backend: type[Radio] = getattr(module, class_name)
-    return backend.from_url(parsed)
+    if not backend.faults_on_link:
+        return backend.from_url(parsed)
+    from particlebot.radio.faults import FaultyRadio, faults_from_url
+
+    faults = faults_from_url(parsed)  # checked before the port is touched
+    radio = backend.from_url(parsed)
+    return FaultyRadio(radio, faults) if faults.any else radio
 
 
 class Radio(ABC):
@@ -197,6 +203,10 @@ class Radio(ABC):
     Backends report link changes (a port that vanished and came back) to link listeners instead
     of raising from receive(), so one session survives an unplugged USB cable.
     """
+
+    faults_on_link: bool = True
+    """Whether open_radio adds the URL's loss= and delay_ms= between the host and this radio
+    (particlebot.radio.faults); simulations model them on their air instead, a replay has none."""
 
     def __init__(self, url: str) -> None:
         self.url = url

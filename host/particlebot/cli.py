@@ -75,6 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
     console = commands.add_parser("console", help="live table of every particle, with commands")
     _radio_options(console)
     console.add_argument("--no-log", action="store_true", help="do not write a session log")
+    console.add_argument(
+        "--fleet", help="fleet file: the roster every STOP must hear from (default ./fleet.toml)"
+    )
 
     log = commands.add_parser("log", help="record a radio to a log without the console")
     _radio_options(log)

@@ -12,10 +12,9 @@ from textual.widget import Widget
 from textual.widgets import DataTable, Input, RichLog, Static
 
 from particlebot.console.app import ConfirmScreen, ConsoleApp
-from particlebot.console.model import ConsoleModel
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
-from particlebot.session import Session
-from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
+from particlebot.swarm.api import Swarm
+from tests.host.fakes import FakeRadio, status_frame, wait_until
 
 
 def run_app(
@@ -24,18 +23,9 @@ def run_app(
     read_only: bool = False,
 ) -> ConsoleApp:
     radio = FakeRadio()
-    recorder = Recorder()
-    session = Session(radio, [recorder])
-    model = ConsoleModel(session, radio.now)
-    session.add_listener(model)
-    session.start()
-    app = ConsoleApp(
-        model,
-        radio_name="fake://",
-        log_path="logs/test.jsonl",
-        refresh_s=0.05,
-        read_only=read_only,
-    )
+    # The console takes over particles it knows from the start here: no grace period.
+    swarm = Swarm(radio, log_dir=None, stop_grace=0)
+    app = ConsoleApp(swarm, log_path="logs/test.jsonl", refresh_s=0.05, read_only=read_only)
 
     async def body() -> None:
         async with app.run_test(size=size) as pilot:
@@ -44,7 +34,7 @@ def run_app(
     try:
         asyncio.run(body())
     finally:
-        session.close()
+        swarm.close()
     return app
 
 

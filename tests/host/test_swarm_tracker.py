@@ -1,13 +1,10 @@
-"""The console model: the particle table, flags, and START/STOP repeated until confirmed."""
+"""The swarm tracker: the particle table, flags, and START/STOP repeated until confirmed."""
 
 from __future__ import annotations
 
 import pytest
 
-from particlebot.console.commands import CommandError, execute, help_text
-from particlebot.console.model import Campaign, ConsoleModel
 from particlebot.protocol import (
-    BROADCAST_ID,
     DEFINITION_HASH,
     UNASSIGNED_ID,
     Message,
@@ -16,7 +13,6 @@ from particlebot.protocol import (
     ParamResult,
     ParamValue,
     Ping,
-    SetId,
     SetParam,
     Start,
     State,
@@ -26,6 +22,7 @@ from particlebot.protocol import (
 )
 from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
+from particlebot.swarm.tracker import Campaign, SwarmTracker
 from tests.host.fakes import ManualClock, status_frame
 
 
@@ -73,17 +70,17 @@ def sink(clock: ManualClock) -> Sink:
 
 
 @pytest.fixture
-def model(sink: Sink, clock: ManualClock) -> ConsoleModel:
-    return ConsoleModel(sink, clock)
+def model(sink: Sink, clock: ManualClock) -> SwarmTracker:
+    return SwarmTracker(sink, clock)
 
 
-def hear(model: ConsoleModel, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
+def hear(model: SwarmTracker, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
     """The frame arrives; then the console's next poll (at the same moment) looks at it."""
     model.on_frame(ReceivedFrame(clock(), source, decode_frame(raw)))
     model.poll()
 
 
-def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualClock) -> None:
+def test_a_status_adds_a_row_with_its_fields(model: SwarmTracker, clock: ManualClock) -> None:
     hear(model, clock, status_frame(4, state=int(State.CYCLING), s_n=3, intensity=812))
     (row,) = model.rows()
     assert (row.id, row.state, row.intensity) == (4, State.CYCLING, 812)
@@ -92,7 +89,7 @@ def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualC
 
 
 def test_a_particle_silent_for_three_status_periods_is_flagged(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(1))
     clock.advance(2.0)
@@ -102,7 +99,7 @@ def test_a_particle_silent_for_three_status_periods_is_flagged(
 
 
 def test_a_different_definition_hash_is_flagged_and_noted_once(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     other = DEFINITION_HASH ^ 0x1
     hear(model, clock, status_frame(2, definition_hash=other))
@@ -112,7 +109,7 @@ def test_a_different_definition_hash_is_flagged_and_noted_once(
 
 
 def test_unassigned_particles_are_told_apart_by_radio_address(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(254), source="0013A20000000001")
     hear(model, clock, status_frame(254), source="0013A20000000002")
@@ -121,25 +118,25 @@ def test_unassigned_particles_are_told_apart_by_radio_address(
 
 
 def test_frames_from_a_base_station_are_not_particles(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, encode_frame(Stop(), 0, 1))
     assert model.rows() == []
 
 
-def run(model: ConsoleModel, clock: ManualClock, seconds: float, every: float = 0.05) -> None:
+def run(model: SwarmTracker, clock: ManualClock, seconds: float, every: float = 0.05) -> None:
     """Polls the model every `every` seconds for `seconds`, as the console's timer does."""
     for _ in range(round(seconds / every)):
         clock.advance(every)
         model.poll()
 
 
-def hear_all(model: ConsoleModel, clock: ManualClock, ids: range, state: State) -> None:
+def hear_all(model: SwarmTracker, clock: ManualClock, ids: range, state: State) -> None:
     for particle in ids:
         hear(model, clock, status_frame(particle, state=int(state)))
 
 
-def stop_running(model: ConsoleModel, clock: ManualClock, ids: range) -> Campaign:
+def stop_running(model: SwarmTracker, clock: ManualClock, ids: range) -> Campaign:
     """Particles ids report CYCLING; then STOP, and polls until its burst has gone out."""
     hear_all(model, clock, ids, State.CYCLING)
     campaign = model.stop()
@@ -148,7 +145,7 @@ def stop_running(model: ConsoleModel, clock: ManualClock, ids: range) -> Campaig
 
 
 def test_stop_goes_out_four_times_in_three_tenths_of_a_second_then_pings_each_particle(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 4), State.CYCLING)
     origin = clock()
@@ -162,7 +159,7 @@ def test_stop_goes_out_four_times_in_three_tenths_of_a_second_then_pings_each_pa
 
 
 def test_after_a_late_poll_the_rest_of_the_burst_goes_out_one_copy_a_poll(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 2), State.CYCLING)
     origin = clock()
@@ -175,7 +172,7 @@ def test_after_a_late_poll_the_rest_of_the_burst_goes_out_one_copy_a_poll(
 
 
 def test_stop_is_repeated_every_half_second_until_every_particle_reports_it_has_stopped(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     origin = clock()
     campaign = stop_running(model, clock, range(1, 4))
@@ -196,7 +193,7 @@ def test_stop_is_repeated_every_half_second_until_every_particle_reports_it_has_
 
 
 def test_a_status_from_before_the_stop_does_not_confirm_it(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(1, state=int(State.IDLE)))
     clock.advance(0.5)
@@ -206,7 +203,7 @@ def test_a_status_from_before_the_stop_does_not_confirm_it(
 
 
 def test_stop_is_not_repeated_once_every_particle_obeys_it_only_pinged(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_running(model, clock, range(1, 3))
     hear_all(model, clock, range(1, 3), State.STOPPING)
@@ -218,7 +215,7 @@ def test_stop_is_not_repeated_once_every_particle_obeys_it_only_pinged(
     assert campaign.success
 
 
-def stop_answered_at_once(model: ConsoleModel, clock: ManualClock) -> Campaign:
+def stop_answered_at_once(model: SwarmTracker, clock: ManualClock) -> Campaign:
     """Particle 1 reports CYCLING; STOP; 0.05 s later (before the burst is out) it is IDLE."""
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
@@ -228,7 +225,7 @@ def stop_answered_at_once(model: ConsoleModel, clock: ManualClock) -> Campaign:
 
 
 def test_the_whole_burst_goes_out_even_when_every_known_particle_has_stopped(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_answered_at_once(model, clock)
     # Particles the console has not heard yet may be out there; only the burst can reach them.
@@ -239,7 +236,7 @@ def test_the_whole_burst_goes_out_even_when_every_known_particle_has_stopped(
 
 
 def test_a_particle_whose_latest_status_is_no_longer_stopped_is_waited_for_again(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_answered_at_once(model, clock)
     assert campaign.confirmed == {"1"}
@@ -254,7 +251,7 @@ def test_a_particle_whose_latest_status_is_no_longer_stopped_is_waited_for_again
 
 
 def test_stop_names_the_particles_that_never_confirmed(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(5, 8), State.CYCLING)
     origin = clock()
@@ -270,7 +267,7 @@ def test_stop_names_the_particles_that_never_confirmed(
 
 
 def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = model.stop()
     run(model, clock, 0.4)
@@ -279,7 +276,7 @@ def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
 
 
 def test_pings_go_to_four_particles_a_round_those_asked_least_first(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     stop_running(model, clock, range(1, 7))
     assert sink.since(4) == ["Ping 1", "Ping 2", "Ping 3", "Ping 4"]
@@ -289,7 +286,7 @@ def test_pings_go_to_four_particles_a_round_those_asked_least_first(
 
 
 def test_one_ping_asks_every_particle_without_an_id(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear(model, clock, status_frame(3, state=int(State.CYCLING)))
     for source in ("0013A20000000001", "0013A20000000002"):
@@ -302,11 +299,11 @@ def test_one_ping_asks_every_particle_without_an_id(
 def test_a_stop_burst_must_start_at_once_and_be_in_order(clock: ManualClock) -> None:
     for burst in [(), (0.1, 0.2), (0.0, 0.2, 0.1)]:
         with pytest.raises(ValueError, match="stop_burst"):
-            ConsoleModel(None, clock, stop_burst=burst)
+            SwarmTracker(None, clock, stop_burst=burst)
 
 
 def start_with_one_answer(
-    model: ConsoleModel, clock: ManualClock, runs: dict[int, int]
+    model: SwarmTracker, clock: ManualClock, runs: dict[int, int]
 ) -> Campaign:
     """Particles (id: run) report those runs; START (method B, 75 steps); 0.1 s later the first
     of them reports the new run."""
@@ -320,7 +317,7 @@ def start_with_one_answer(
 
 
 def test_start_takes_a_new_run_id_and_pings_each_particle_until_it_reports_it(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     origin = clock()
     campaign = start_with_one_answer(model, clock, {1: 7, 2: 3})
@@ -338,7 +335,7 @@ def test_start_takes_a_new_run_id_and_pings_each_particle_until_it_reports_it(
 
 
 def test_start_is_resent_with_the_same_run_id_when_a_particle_reports_another_run(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = start_with_one_answer(model, clock, {1: 7, 2: 7})
     hear(model, clock, status_frame(2, run_id=7))  # its answer shows it missed START
@@ -350,7 +347,7 @@ def test_start_is_resent_with_the_same_run_id_when_a_particle_reports_another_ru
 
 
 def test_start_names_the_particles_that_never_confirmed(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = start_with_one_answer(model, clock, {1: 2, 4: 2})
     run(model, clock, model.start_timeout + 0.1)
@@ -360,7 +357,7 @@ def test_start_names_the_particles_that_never_confirmed(
 
 
 def test_stop_cancels_a_start_still_being_resent(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear(model, clock, status_frame(1))
     start = model.start(Method.COUNTING)
@@ -372,76 +369,24 @@ def test_stop_cancels_a_start_still_being_resent(
     assert "Start" not in sink.types()[1:]
 
 
-def test_param_values_are_shown_as_notes(model: ConsoleModel, clock: ManualClock) -> None:
+def test_param_values_are_shown_as_notes(model: SwarmTracker, clock: ManualClock) -> None:
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(ParamResult.BUSY), value=150)
     hear(model, clock, encode_frame(reply, 3, 0))
     assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (BUSY)"
-
-
-def test_commands_become_the_right_messages(model: ConsoleModel, sink: Sink) -> None:
-    execute(model, "start B cycle=300 wave=4 update=60 phototaxis=1")
-    execute(model, "set cycle_steps 75 3")
-    execute(model, "set 8 20")
-    execute(model, "setid 254 12")
-    execute(model, "identify all")
-    execute(model, "ping 4")
-    start, set_one, set_all, set_id, identify, ping = sink.messages
-    assert start == Start(
-        run_id=1, method=1, cycle_steps=300, wave_size=4, update_interval_s=60, phototaxis=1
-    )
-    assert set_one == SetParam(target=3, param=int(Param.CYCLE_STEPS), value=75)
-    assert set_all == SetParam(target=BROADCAST_ID, param=int(Param.COUNT_TOLERANCE), value=20)
-    assert set_id == SetId(target=254, new_id=12)
-    assert identify.target == BROADCAST_ID  # type: ignore[attr-defined]
-    assert ping == Ping(target=4)
-
-
-def test_the_stop_and_start_commands_say_how_they_are_repeated(
-    model: ConsoleModel, clock: ManualClock
-) -> None:
-    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
-    assert "4 copies in 0.3 s" in execute(model, "stop")
-    assert "1 known particle(s)" in execute(model, "start D")
-
-
-@pytest.mark.parametrize(
-    ("line", "complaint"),
-    [
-        ("start E", "use A, B, C or D"),
-        ("start cycle=5", "cycle must be 10..3000"),
-        ("start speed=3", "takes cycle="),
-        ("set nonsense 3", "params"),
-        ("set cycle_steps 99999", "10..3000"),
-        ("setid all 4", "one particle"),
-        ("setid 3 254", "1..253"),
-        ("identify", "usage"),
-        ("fly", "help"),
-    ],
-)
-def test_bad_commands_say_how_to_write_them(model: ConsoleModel, line: str, complaint: str) -> None:
-    with pytest.raises(CommandError, match=complaint):
-        execute(model, line)
-    assert model.run_id == 0
-
-
-def test_help_lists_every_command() -> None:
-    text = help_text()
-    for command in ("start", "stop", "set", "get", "identify", "setid", "ping", "quit"):
-        assert f"\n{command}" in f"\n{text}"
 
 
 # ---- answers to SET_PARAM and GET_PARAM --------------------------------------------------------
 
 
 def answer(
-    model: ConsoleModel, clock: ManualClock, particle: int, result: ParamResult, value: int
+    model: SwarmTracker, clock: ManualClock, particle: int, result: ParamResult, value: int
 ) -> None:
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(result), value=value)
     hear(model, clock, encode_frame(reply, particle, 0))
 
 
 def test_answers_to_a_broadcast_set_are_summarised_in_one_line(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     notes_before = len(model.notes)
@@ -454,8 +399,13 @@ def test_answers_to_a_broadcast_set_are_summarised_in_one_line(
     assert sink.notes[-1] == summary  # and it goes into the log
 
 
+def asked_for(model: SwarmTracker) -> float:
+    """How long a query waits at most: the first wait, then a retry by id each time."""
+    return model.param_timeout + (model.param_attempts - 1) * model.param_retry
+
+
 def test_refusals_and_silence_are_named_in_the_summary(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     notes_before = len(model.notes)
@@ -464,7 +414,13 @@ def test_refusals_and_silence_are_named_in_the_summary(
         answer(model, clock, particle, ParamResult.OK, 300)
     for particle in (3, 7):
         answer(model, clock, particle, ParamResult.BUSY, 150)
+    sent = len(sink.messages)
     run(model, clock, model.param_timeout)
+    # Particle 9 may have missed the broadcast, or its answer was lost: it is asked by id.
+    assert sink.messages[sent:] == [SetParam(target=9, param=int(Param.CYCLE_STEPS), value=300)]
+    assert list(model.notes)[notes_before:] == []
+    run(model, clock, asked_for(model) - model.param_timeout)
+    assert len(sink.messages) == sent + model.param_attempts - 1
     (summary,) = [note for note in list(model.notes)[notes_before:]]
     assert summary.text == (
         "SET CYCLE_STEPS = 300: 7/10 OK; BUSY: 3, 7 (STOP them first); no answer from 9"
@@ -472,8 +428,21 @@ def test_refusals_and_silence_are_named_in_the_summary(
     assert summary.level == "warning"
 
 
+def test_a_particle_asked_again_by_id_completes_the_summary(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear_all(model, clock, range(1, 4), State.IDLE)
+    query = model.set_param(Param.CYCLE_STEPS, 300)
+    for particle in (1, 2):
+        answer(model, clock, particle, ParamResult.OK, 300)
+    run(model, clock, model.param_timeout + model.param_retry)
+    answer(model, clock, 3, ParamResult.OK, 300)
+    assert query.done and query.ok
+    assert model.notes[-1].text == "SET CYCLE_STEPS = 300: 3/3 OK"
+
+
 def test_a_broadcast_get_groups_the_particles_by_value(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     model.get_param(Param.CYCLE_STEPS)
@@ -483,21 +452,21 @@ def test_a_broadcast_get_groups_the_particles_by_value(
 
 
 def test_a_get_nobody_answers_says_so_after_its_timeout(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear_all(model, clock, range(1, 3), State.IDLE)
     model.get_param(Param.CYCLE_STEPS)
-    run(model, clock, model.param_timeout - 0.1)
+    run(model, clock, asked_for(model) - 0.1)
     assert not model.notes
     run(model, clock, 0.1)
-    assert model.notes[-1].text == "GET CYCLE_STEPS: no particle answered within 2 s"
+    assert model.notes[-1].text == "GET CYCLE_STEPS: no particle answered within 6.5 s"
     model.get_param(Param.CYCLE_STEPS, 7)
-    run(model, clock, model.param_timeout)
-    assert model.notes[-1].text == "GET CYCLE_STEPS to particle 7: no answer within 2 s"
+    run(model, clock, asked_for(model))
+    assert model.notes[-1].text == "GET CYCLE_STEPS to particle 7: no answer within 6.5 s"
 
 
 def test_the_answer_of_one_particle_asked_by_id_is_one_line(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     model.get_param(Param.CYCLE_STEPS, 3)
     answer(model, clock, 3, ParamResult.OK, 150)
@@ -508,7 +477,7 @@ def test_the_answer_of_one_particle_asked_by_id_is_one_line(
 
 
 def test_a_particle_that_resets_during_a_run_is_flagged_with_the_cause(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, state=int(State.CYCLING), run_id=3, uptime_ms=60_000))
     clock.advance(2.0)
@@ -523,7 +492,7 @@ def test_a_particle_that_resets_during_a_run_is_flagged_with_the_cause(
 
 
 def test_a_reset_outside_a_run_is_noted_but_not_flagged(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, uptime_ms=60_000))
     hear(model, clock, status_frame(4, resets=2, last_reset_cause=0x01))
@@ -534,7 +503,7 @@ def test_a_reset_outside_a_run_is_noted_but_not_flagged(
 
 
 def test_a_reset_with_a_saturated_counter_is_still_seen_by_the_uptime(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, state=int(State.PAUSED), resets=255, uptime_ms=9_000))
     hear(model, clock, status_frame(4, resets=255, uptime_ms=400, last_reset_cause=0x08))
@@ -546,7 +515,7 @@ def test_a_reset_with_a_saturated_counter_is_still_seen_by_the_uptime(
 
 
 def test_a_radio_that_hears_nothing_gets_a_hint_once(sink: Sink, clock: ManualClock) -> None:
-    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    model = SwarmTracker(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
     run(model, clock, 4.9)
     assert not model.notes
     run(model, clock, 10.0)
@@ -556,7 +525,7 @@ def test_a_radio_that_hears_nothing_gets_a_hint_once(sink: Sink, clock: ManualCl
 
 
 def test_a_radio_that_hears_something_gets_no_hint(sink: Sink, clock: ManualClock) -> None:
-    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    model = SwarmTracker(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
     model.on_packet(Packet(b"\x00", None, clock()))
     run(model, clock, 10.0)
     assert not model.notes
@@ -573,7 +542,7 @@ class LostPortSink(Sink):
 
 
 def test_a_radio_that_can_never_send_ends_a_campaign_with_one_message(clock: ManualClock) -> None:
-    model = ConsoleModel(ReadOnlySink(clock), clock)
+    model = SwarmTracker(ReadOnlySink(clock), clock)
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
     run(model, clock, 3.0)
@@ -586,7 +555,7 @@ def test_a_radio_that_can_never_send_ends_a_campaign_with_one_message(clock: Man
 def test_a_lost_port_is_reported_once_per_campaign_not_once_per_resend(
     clock: ManualClock,
 ) -> None:
-    model = ConsoleModel(LostPortSink(clock), clock)
+    model = SwarmTracker(LostPortSink(clock), clock)
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
     run(model, clock, 3.0)

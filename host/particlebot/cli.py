@@ -148,13 +148,15 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--no-log", action="store_true", help="do not write a session log")
     _log_options(demo)
 
-    # Fleet tools: each module adds its own options.
+    # Fleet tools and experiments: each module adds its own options.
     from particlebot.commands import flash, radio
     from particlebot.commands import fleet as fleet_command
+    from particlebot.commands import run as run_command
 
     flash.add_arguments(commands.add_parser("flash", help="firmware and an id onto Fio v3 boards"))
     radio.add_arguments(commands.add_parser("radio", help="configure XBee radios for the fleet"))
     fleet_command.add_arguments(commands.add_parser("fleet", help="create or list the fleet file"))
+    run_command.add_arguments(commands.add_parser("run", help="run an experiment file's trials"))
     return parser
 
 
@@ -170,7 +172,7 @@ def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
         from particlebot.commands.plot import run
     elif command == "replay":
         from particlebot.commands.replay import run
-    elif command in ("flash", "radio", "fleet"):
+    elif command in ("flash", "radio", "fleet", "run"):
         run = importlib.import_module(f"particlebot.commands.{command}").run
     else:
         from particlebot.commands.demo import run

@@ -67,6 +67,11 @@ def method_of(method: str | Method) -> Method:
     return found
 
 
+def method_letter(method: Method) -> str:
+    """A, B, C or D, as the paper names the methods."""
+    return "ABCD"[int(method)]
+
+
 def param_of(param: str | int | Param) -> Param:
     """A parameter from its name (cycle_steps, any case), its number, or the enum itself."""
     if isinstance(param, Param):
@@ -206,10 +211,12 @@ class Swarm:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        """Leaving the block by an exception (Ctrl-C too) while particles are in a run sends
-        STOP first, and waits for it to be confirmed; then closes."""
+        """Leaving the block by an exception (Ctrl-C too) while a run goes on (a START and no
+        STOP since) sends STOP first, and waits for it to be confirmed; then closes."""
+        tracker = self.tracker
         try:
-            if exc_type is not None and not self.closed and self.tracker.moving_ids():
+            # Not when a STOP went out since the last START: that one was seen through already.
+            if exc_type is not None and not self.closed and tracker.run_active:
                 with contextlib.suppress(SwarmError, RadioError):
                     self.stop()
         finally:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -42,7 +43,7 @@ def write(folder: Path, text: str, name: str = "experiment.toml") -> Path:
     return path
 
 
-def records(log: Path) -> list[dict[str, object]]:
+def records(log: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in log.read_text().splitlines()]
 
 

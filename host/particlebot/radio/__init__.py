@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import importlib
 import threading
@@ -115,6 +116,9 @@ class RadioUrl:
     scheme: str
     target: str
     options: dict[str, str]
+    caller_steps: bool = False
+    """A simulated radio is stepped by whoever opened it (particlebot.Swarm at speed=max), never
+    by a thread of its own: the same run every time for a seed."""
 
     def get_float(self, key: str, default: float, bounds: Bounds = ANY) -> float:
         """Option key as a finite number within bounds (default when absent)."""
@@ -176,9 +180,10 @@ def parse_radio_url(text: str) -> RadioUrl:
     return RadioUrl(text=text, scheme=scheme, target=target, options=options)
 
 
-def open_radio(url: str) -> Radio:
-    """Opens the radio a URL names; raises RadioError with advice if it cannot."""
-    parsed = parse_radio_url(url)
+def open_radio(url: str, *, caller_steps: bool = False) -> Radio:
+    """Opens the radio a URL names; raises RadioError with advice if it cannot. caller_steps: see
+    RadioUrl (real radios ignore it)."""
+    parsed = dataclasses.replace(parse_radio_url(url), caller_steps=caller_steps)
     module_name, _, class_name = BACKENDS[parsed.scheme].partition(":")
     try:
         module = importlib.import_module(module_name)

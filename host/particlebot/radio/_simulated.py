@@ -112,7 +112,14 @@ class SwarmRadio(Radio, Generic[SwarmT]):
         if self._owns_thread:
             raise RuntimeError("the simulation steps on its own thread")
         self._check()
-        self.swarm.run_for(seconds)
+        end = self.now() + seconds
+        faults = self.link_faults
+        # Delayed sends leave when they are due, not at the end of the step.
+        while faults is not None and (due := faults.next_send_due()) is not None and due < end:
+            self.swarm.run_for(max(0.0, due - self.now()))
+            # The simulation moves in steps of its own: within one of them counts as due.
+            faults.release_sends(due, self.swarm.send_from_base)
+        self.swarm.run_for(max(0.0, end - self.now()))
 
     @abstractmethod
     def _connect(self) -> None:

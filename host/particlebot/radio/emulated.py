@@ -84,7 +84,8 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = url.get_speed()
+        speed = url.get_speed()  # checked either way
+        pace = None if url.caller_steps else speed
         try:
             swarm = EmulatedSwarm(config)
         except (FileNotFoundError, HarnessError, OSError) as exc:
@@ -92,7 +93,7 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
                 f"The emulated particles need the firmware image and the simavr harness ({exc}). "
                 "Run: make firmware harness (after `make system-deps` for the AVR tools)"
             ) from exc
-        return cls(swarm, url=url.text, speed=speed, owns_swarm=True)
+        return cls(swarm, url=url.text, speed=pace, owns_swarm=True)
 
     def close(self) -> None:
         if self._owns_swarm:

@@ -123,6 +123,10 @@ class LinkFaults:
                 return heapq.heappop(self._packets)[2]
             return None
 
+    def next_send_due(self) -> float | None:
+        with self._lock:
+            return self._sends[0][0] if self._sends else None
+
     def next_due(self) -> float | None:
         with self._lock:
             times = [queue[0][0] for queue in (self._sends, self._packets) if queue]

@@ -57,7 +57,8 @@ class VirtualRadio(SwarmRadio[VirtualSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = url.get_speed()
+        speed = url.get_speed()  # checked either way
+        pace = None if url.caller_steps else speed
         try:
             swarm = VirtualSwarm(config)
         except (OSError, ImportError) as exc:
@@ -68,7 +69,7 @@ class VirtualRadio(SwarmRadio[VirtualSwarm]):
         faults = faults_from_url(url)
         lose_on_air(swarm, faults.loss, config.seed)
         link = LinkFaults(Faults(delay_s=faults.delay_s)) if faults.delay_s else None
-        return cls(swarm, url=url.text, speed=speed, link_faults=link)
+        return cls(swarm, url=url.text, speed=pace, link_faults=link)
 
 
 def lose_on_air(swarm: VirtualSwarm, loss: float, seed: int) -> None:

@@ -22,7 +22,7 @@ from particlebot.protocol import (
     Param,
     ParamResult,
 )
-from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio
+from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio, parse_radio_url
 from particlebot.radio._simulated import SwarmRadio
 from particlebot.session import Session
 from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery
@@ -47,6 +47,7 @@ POLL_S = 0.05
 WAIT_PING_S = 1.0
 """wait_for() asks every particle for a STATUS this often, rather than waiting 2 s for each."""
 SET_ID_TIMEOUT_S = 5.0
+SIMULATED_SCHEMES = ("virtual", "emulated")
 
 METHODS: dict[str, Method] = {
     "a": Method.DIRECT,
@@ -180,7 +181,14 @@ class Swarm:
         Raises RadioError, particlebot.logs.jsonl.LogError or FleetFileError with one line
         saying what to change.
         """
-        opened = open_radio(radio) if isinstance(radio, str) else radio
+        if isinstance(radio, str):
+            # At speed=max the simulation is stepped by this object from the start: no thread
+            # of its own ever runs ahead.
+            parsed = parse_radio_url(radio)
+            flat_out = parsed.scheme in SIMULATED_SCHEMES and math.isinf(parsed.get_speed())
+            opened = open_radio(radio, caller_steps=bool(stepped or (stepped is None and flat_out)))
+        else:
+            opened = radio
         return cls(
             opened,
             log_dir=log_dir,

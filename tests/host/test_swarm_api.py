@@ -14,6 +14,7 @@ from particlebot.protocol import Method, ParamResult
 from particlebot.radio import InvalidRadioUrlError
 from particlebot.radio.virtual import VirtualRadio, lose_on_air
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+from tests.host.truth import true_states
 
 LOSSY = "virtual://6?speed=max&loss=0.2&seed=2"
 
@@ -100,7 +101,7 @@ def test_stop_names_who_did_not_confirm_and_why() -> None:
     ((particle, reason),) = [(u.particle, u.reason) for u in report.unconfirmed]
     assert particle == 3 and reason.startswith("no STATUS since the command")
     assert "STOP not confirmed within 10 s by particle(s) 3 (3 confirmed)" in report.text
-    assert State(world.members[2].firmware.status().state) is not State.IDLE  # it never got STOP
+    assert true_states(world)[2] is not State.IDLE  # it never got STOP
 
 
 def test_leaving_the_block_by_an_exception_stops_a_running_swarm() -> None:
@@ -112,7 +113,7 @@ def test_leaving_the_block_by_an_exception_stops_a_running_swarm() -> None:
         swarm.wait_for(count=3)
         swarm.start("D", cycle_steps=75)
         raise RuntimeError("the script failed")
-    assert {State(m.firmware.status().state) for m in world.members} <= {State.IDLE, State.DONE}
+    assert set(true_states(world)) <= {State.IDLE, State.DONE}
 
 
 @pytest.mark.parametrize(

@@ -13,6 +13,7 @@ from particlebot.protocol import (
     ParamResult,
     ParamValue,
     Ping,
+    SetId,
     SetParam,
     Start,
     State,
@@ -22,7 +23,7 @@ from particlebot.protocol import (
 )
 from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
-from particlebot.swarm.tracker import Campaign, SwarmTracker
+from particlebot.swarm.tracker import Campaign, IdInUseError, Rename, SwarmTracker
 from tests.host.fakes import ManualClock, status_frame
 
 
@@ -561,3 +562,108 @@ def test_a_lost_port_is_reported_once_per_campaign_not_once_per_resend(
     run(model, clock, 3.0)
     assert not campaign.done  # the port may come back: it keeps trying
     assert len([note for note in model.notes if "Could not send" in note.text]) == 1
+
+
+# ---- who is in the swarm: grace period, largest group, duplicates, renames ----------------------
+
+
+def test_just_after_the_start_stop_keeps_going_out_and_asks_everyone(
+    sink: Sink, clock: ManualClock
+) -> None:
+    model = SwarmTracker(sink, clock, stop_grace=10.0)
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    origin = clock()
+    campaign = model.stop()
+    run(model, clock, 0.4)
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    run(model, clock, 5.0)
+    # Particle 1 confirmed long ago, but others may be out there: STOP every 0.5 s, and a
+    # PING to every particle each second, until the grace period is over.
+    assert not campaign.done
+    stops = sink.offsets(Stop, origin)
+    assert stops[4:] == [round(0.8 + 0.5 * k, 3) for k in range(len(stops) - 4)]
+    broadcast_pings = [m for m in sink.messages if isinstance(m, Ping) and m.target == 255]
+    assert len(broadcast_pings) >= 4
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    run(model, clock, 5.0)
+    assert campaign.done and campaign.success
+    assert "confirmed by all 1 particles in 10.0 s" in campaign.outcome
+
+
+def test_a_particle_first_heard_during_a_stop_must_confirm_it_too(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    hear(model, clock, status_frame(2, state=int(State.CYCLING)))  # missed the first copy
+    run(model, clock, 0.5)
+    assert not campaign.done and campaign.pending == {"2"}
+    hear(model, clock, status_frame(2, state=int(State.IDLE)))
+    assert campaign.done and campaign.success and campaign.confirmed == {"1", "2"}
+
+
+def test_a_run_reported_by_a_group_sets_how_many_must_confirm_stop(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    for particle in (1, 2):
+        hear(model, clock, status_frame(particle, state=int(State.CYCLING), group_size=3))
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear_all(model, clock, range(1, 3), State.IDLE)
+    run(model, clock, model.stop_timeout)
+    assert campaign.done and not campaign.success
+    assert "2 particle(s) confirmed, but 3 were seen together; 1 never answered" in (
+        campaign.outcome
+    )
+
+
+def test_two_clocks_under_one_id_on_a_transparent_link_are_a_duplicate(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(5, uptime_ms=100_000, resets=3))
+    clock.advance(1.0)
+    assert not model.rows()[0].duplicate
+    # Another particle 5, switched on 30 s ago: its uptime is not this one's.
+    hear(model, clock, status_frame(5, uptime_ms=30_000, resets=3))
+    (row,) = model.rows()
+    assert row.duplicate == (
+        "two particles answer as 5: its uptime jumped from 100 s to 30 s in 1 s"
+    )
+    assert model.notes[-1].level == "error" and "DUPLICATE id 5" in model.notes[-1].text
+    assert row.reset_in_run is None  # not taken for a reset
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear(model, clock, status_frame(5, state=int(State.IDLE), uptime_ms=101_000, resets=3))
+    run(model, clock, model.stop_timeout)
+    # Which of the two answered cannot be told: STOP is never confirmed for them.
+    assert campaign.done and not campaign.success
+    assert model.unconfirmed(campaign) == [
+        (5, f"duplicate id: {row.duplicate}; their answers cannot be told apart")
+    ]
+
+
+def test_a_reset_is_not_taken_for_a_duplicate(model: SwarmTracker, clock: ManualClock) -> None:
+    hear(model, clock, status_frame(5, uptime_ms=100_000, resets=3))
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, uptime_ms=1_200, resets=4, last_reset_cause=0x08))
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, uptime_ms=3_200, resets=4))
+    assert not model.rows()[0].duplicate
+    assert "Particle 5 reset (watchdog" in model.notes[-1].text
+
+
+def test_a_particle_renamed_from_here_on_a_transparent_link_leaves_no_row(
+    model: SwarmTracker, clock: ManualClock, sink: Sink
+) -> None:
+    hear(model, clock, status_frame(3, uptime_ms=50_000))
+    hear(model, clock, status_frame(4, uptime_ms=60_000))
+    with pytest.raises(IdInUseError, match="id 4 is in use"):
+        model.set_id(3, 4)
+    model.set_id(3, 9)
+    assert sink.messages[-1] == SetId(target=3, new_id=9)
+    clock.advance(0.05)
+    hear(model, clock, status_frame(9, uptime_ms=50_050))  # its answer, under the new id
+    assert [row.id for row in model.rows()] == [4, 9]
+    assert model.take_renames() == [Rename(3, 9, None)]

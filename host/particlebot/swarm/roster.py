@@ -74,6 +74,14 @@ class ParticleRow:
     """Whether the fleet file lists its id (None without a fleet)."""
     duplicate: str | None = None
     """Why its id looks like two particles' (None if it does not)."""
+    told_apart: bool = False
+    """A duplicate whose radio tells it from the others (each has a row of its own, and answers
+    for itself); on a transparent link two particles with one id cannot be told apart."""
+
+    @property
+    def answers_for_itself(self) -> bool:
+        """Whether this row's STATUS reports come from one particle only."""
+        return self.duplicate is None or self.told_apart
 
     @property
     def heard(self) -> bool:

@@ -286,6 +286,7 @@ class SwarmTracker(Listener):
             why = f"radios {radios} both answer as particle {sender}"
             for other in [*same_id, row]:
                 other.duplicate = why
+                other.told_apart = True
             self._note_duplicate(sender, why)
         return row
 
@@ -337,8 +338,9 @@ class SwarmTracker(Listener):
     def _recheck_duplicates(self, particle_id: int) -> None:
         """Clears the duplicate flag of an id left with one radio (the other was renamed)."""
         same = [row for row in self.particles.values() if row.id == particle_id]
-        if len(same) == 1 and same[0].duplicate and same[0].duplicate.startswith("radios"):
+        if len(same) == 1 and same[0].told_apart:
             same[0].duplicate = None
+            same[0].told_apart = False
 
     def _count_heard(self, now: float) -> None:
         together = sum(
@@ -355,8 +357,9 @@ class SwarmTracker(Listener):
         previous = row.status
         if previous is not None and row.status_time is not None:
             why = two_clocks(previous, row.status_time, status, at)
-            if why is not None and row.duplicate is None:
+            if why is not None and not row.duplicate:
                 row.duplicate = f"two particles answer as {row.id}: {why}"
+                row.told_apart = False
                 self._note_duplicate(row.id, row.duplicate)
             elif why is None and reset_between(previous, status):
                 self._on_reset(row, previous, status)
@@ -519,8 +522,8 @@ class SwarmTracker(Listener):
         return 256 if row is None else row.id
 
     def _why_pending(self, campaign: Campaign, row: ParticleRow) -> str:
-        if row.duplicate is not None:
-            return f"duplicate id: {row.duplicate}"
+        if not row.answers_for_itself:
+            return f"duplicate id: {row.duplicate}; their answers cannot be told apart"
         if not row.heard:
             return "in the fleet, never heard in this session"
         if not _fresh(row, campaign.started):
@@ -564,7 +567,7 @@ class SwarmTracker(Listener):
                 row = self.particles.get(key)
                 return (
                     row is not None
-                    and row.duplicate is None
+                    and row.answers_for_itself
                     and _fresh(row, since)
                     and row.status is not None
                     and row.status.run_id == run_id
@@ -611,7 +614,7 @@ class SwarmTracker(Listener):
                 row = self.particles.get(key)
                 return (
                     row is not None
-                    and row.duplicate is None
+                    and row.answers_for_itself
                     and _fresh(row, since)
                     and row.state in STOPPED_STATES
                 )

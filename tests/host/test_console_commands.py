@@ -71,7 +71,8 @@ def test_setid_refuses_an_id_in_use_unless_forced(swarm: Swarm, fake_radio: Fake
 
 def test_forget_drops_a_particle_by_hand(swarm: Swarm, fake_radio: FakeRadio) -> None:
     hear(swarm, fake_radio, 7)
-    assert "forgotten" in execute(swarm, "forget 7")
+    assert execute(swarm, "forget 7") == ""
+    assert "Particle 7 forgotten: no longer expected" in swarm.notes()[-1]
     assert swarm.particles() == []
     assert execute(swarm, "forget 7") == "No particle 7 to forget"
     assert fake_radio.sent == []

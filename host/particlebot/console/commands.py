@@ -257,9 +257,8 @@ def _forget(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     target = parse_target(args[0], allow_all=False)
 
     def forget() -> str:
-        if swarm.forget(target):
-            return f"Particle {target} forgotten; it comes back if it is heard again"
-        return f"No particle {target} to forget"
+        # The swarm notes what it forgot (shown, and logged).
+        return "" if swarm.forget(target) else f"No particle {target} to forget"
 
     return forget
 

@@ -728,7 +728,10 @@ class SwarmTracker(Listener):
             if self.roster is not None:
                 self.roster.discard(particle_id)
             if removed:
-                self._note(f"Particle {particle_id} forgotten: no longer expected")
+                self._note(
+                    f"Particle {particle_id} forgotten: no longer expected (it comes back if "
+                    "it is heard again)"
+                )
             return removed
 
     def _remove_rows(self, particle_id: int) -> int:

@@ -173,3 +173,33 @@ def test_files_without_trials_or_a_radio_or_at_all_are_one_line_too(
         assert complaint in message
     assert main(["run", str(tmp_path / "missing.toml")]) == 2
     assert "missing.toml: no such file" in capsys.readouterr().err
+
+
+def test_a_prompt_between_runs_waits_for_the_person(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    text = TWO_TRIALS.replace('between = "pause"', 'between = "prompt"')
+    text = text.replace("duration_s = 25", "duration_s = 3").replace(
+        "duration_s = 10", "duration_s = 3"
+    )
+    asked: list[str] = []
+
+    def answer(question: str) -> str:
+        asked.append(question)
+        return ""
+
+    monkeypatch.setattr("builtins.input", answer)
+    assert main(["run", str(write(tmp_path, text)), "--log-dir", str(tmp_path / "a")]) == 0
+    assert asked == [
+        "Put the swarm back for trial 2 (linear, tolerance 12), then press Enter (Ctrl-C ends "
+        "the experiment) "
+    ]
+    capsys.readouterr()
+
+    def closed(question: str) -> str:
+        raise EOFError
+
+    monkeypatch.setattr("builtins.input", closed)
+    assert main(["run", str(write(tmp_path, text)), "--log-dir", str(tmp_path / "b")]) == 1
+    out = capsys.readouterr().out
+    assert "nobody can answer the prompt" in out and "[2/2]" not in out

@@ -667,3 +667,33 @@ def test_a_particle_renamed_from_here_on_a_transparent_link_leaves_no_row(
     hear(model, clock, status_frame(9, uptime_ms=50_050))  # its answer, under the new id
     assert [row.id for row in model.rows()] == [4, 9]
     assert model.take_renames() == [Rename(3, 9, None)]
+
+
+def test_two_particles_switched_on_together_are_told_by_their_frame_numbers(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    # Same uptime, same reset count: but each numbers its own frames.
+    for step, seq in enumerate((40, 38)):
+        clock.advance(1.0)
+        hear(model, clock, status_frame(5, seq=seq, uptime_ms=60_000 + 1000 * step))
+    assert model.rows()[0].duplicate == (
+        "two particles answer as 5: its frame numbers went back from 40 to 38 with no reset"
+    )
+
+
+def test_a_shadow_lost_frames_and_a_reset_are_no_duplicate(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    # Light that jumps and comes back (a hand over the swarm), frame numbers with gaps (lost
+    # frames) and round the 8-bit wrap, then a reset that starts them again from 0.
+    for step, (seq, intensity) in enumerate(((250, 900), (255, 400), (3, 900), (40, 890))):
+        clock.advance(2.0)
+        hear(
+            model,
+            clock,
+            status_frame(5, seq=seq, uptime_ms=60_000 + 2000 * step, intensity=intensity),
+        )
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, seq=0, uptime_ms=900, resets=2))
+    assert model.rows()[0].duplicate is None
+    assert "Particle 5 reset" in model.notes[-1].text

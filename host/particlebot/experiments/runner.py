@@ -144,7 +144,7 @@ class Runner:
         log_dir: Path,
         *,
         out: TextIO,
-        ask: Callable[[str], str] = input,
+        ask: Callable[[str], str] | None = None,
         wall_sleep: Callable[[float], None] = time.sleep,
     ) -> None:
         self.experiment = experiment
@@ -152,6 +152,7 @@ class Runner:
         self.folder = run_folder(log_dir, experiment.name)
         self.out = out
         self.ask = ask
+        """Asks the person between runs (default: input() on the terminal)."""
         self.wall_sleep = wall_sleep
         self.expected = expected_particles(experiment, url)
         self.results: list[TrialResult] = []
@@ -193,10 +194,17 @@ class Runner:
 
     def _between(self, trial: Trial) -> None:
         if trial.between == "prompt":
-            self.ask(
-                f"Put the swarm back for trial {trial.number} ({trial.name}), then press Enter "
-                "(Ctrl-C ends the experiment) "
-            )
+            try:
+                (self.ask or input)(
+                    f"Put the swarm back for trial {trial.number} ({trial.name}), then press "
+                    "Enter (Ctrl-C ends the experiment) "
+                )
+            except EOFError:  # no terminal, or its input closed: nobody can answer
+                self.say(
+                    "\n  nobody can answer the prompt (no input): the experiment stops here; "
+                    'between = "pause" runs without a person'
+                )
+                raise ExperimentStopped from None
         elif trial.between == "pause" and trial.pause_s > 0:
             self.say(f"  pause of {trial.pause_s:g} s")
             self.wall_sleep(trial.pause_s)

@@ -52,6 +52,22 @@ def two_clocks(before: Status, before_at: float, after: Status, after_at: float)
     return None
 
 
+SEQ_WINDOW_S = 20.0
+"""A particle sends under 3 frames a second at most (an estimation round's broadcasts and its
+STATUS): within this long, its 8-bit frame counter cannot go round half way."""
+
+
+def two_senders(before_seq: int, before_at: float, after_seq: int, after_at: float) -> str | None:
+    """Why two STATUS frames under one id, with no reset between them, cannot come from one
+    particle (None if they can): each particle numbers its frames, and its number only grows
+    (lost frames leave gaps, never a step back). Two particles switched on together have
+    uptimes that agree, but not frame numbers for long."""
+    back = (before_seq - after_seq) % 256
+    if 0 < back < 128 and after_at - before_at < SEQ_WINDOW_S:
+        return f"its frame numbers went back from {before_seq} to {after_seq} with no reset"
+    return None
+
+
 @dataclass
 class ParticleRow:
     """Everything heard from one particle, or a particle of the fleet not heard yet."""
@@ -74,6 +90,8 @@ class ParticleRow:
     """Whether the fleet file lists its id (None without a fleet)."""
     duplicate: str | None = None
     """Why its id looks like two particles' (None if it does not)."""
+    status_seq: int | None = None
+    """The frame number of its latest STATUS."""
     told_apart: bool = False
     """A duplicate whose radio tells it from the others (each has a row of its own, and answers
     for itself); on a transparent link two particles with one id cannot be told apart."""

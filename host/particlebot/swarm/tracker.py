@@ -48,6 +48,7 @@ from particlebot.swarm.roster import (
     STOPPED_STATES,
     ParticleRow,
     two_clocks,
+    two_senders,
 )
 
 # A particle answers a broadcast SET_PARAM or GET_PARAM in a random one of 10 slots of 60 ms;
@@ -229,7 +230,7 @@ class SwarmTracker(Listener):
             row.frames += 1
             message = frame.message
             if isinstance(message, Status):
-                self._on_status(row, message, received.time)
+                self._on_status(row, message, received.time, frame.seq)
             elif isinstance(message, Intensity):
                 row.intensity = message.intensity
             elif isinstance(message, ParamValue):
@@ -350,13 +351,16 @@ class SwarmTracker(Listener):
         )
         self.largest_group = max(self.largest_group, together)
 
-    def _on_status(self, row: ParticleRow, status: Status, at: float) -> None:
+    def _on_status(self, row: ParticleRow, status: Status, at: float, seq: int) -> None:
         first_mismatch = status.definition_hash != self.host_hash and (
             row.status is None or row.status.definition_hash == self.host_hash
         )
         previous = row.status
-        if previous is not None and row.status_time is not None:
+        # Particles without an id all answer as 254: nothing to tell apart there.
+        if previous is not None and row.status_time is not None and row.id != UNASSIGNED_ID:
             why = two_clocks(previous, row.status_time, status, at)
+            if why is None and row.status_seq is not None and not reset_between(previous, status):
+                why = two_senders(row.status_seq, row.status_time, seq, at)
             if why is not None and not row.duplicate:
                 row.duplicate = f"two particles answer as {row.id}: {why}"
                 row.told_apart = False
@@ -365,6 +369,7 @@ class SwarmTracker(Listener):
                 self._on_reset(row, previous, status)
         row.status = status
         row.status_time = at
+        row.status_seq = seq
         row.intensity = status.intensity
         if status.state in RUN_STATES:
             self.largest_group = max(self.largest_group, status.group_size)

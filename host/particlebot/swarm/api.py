@@ -348,12 +348,8 @@ class Swarm:
         reports the run. cycle_steps (20 ms servo steps per cycle), wave_size (N of eq. 3) and
         update_interval_s left 0 keep each particle's stored value (wave_size: automatic).
         NotConfirmed names the particles that did not join, and why."""
-        chosen = method_of(method)
-        check_value(Param.CYCLE_STEPS, cycle_steps, zero_keeps=True)
-        check_value(Param.WAVE_SIZE, wave_size, zero_keeps=True)
-        check_value(Param.UPDATE_INTERVAL_S, update_interval_s, zero_keeps=True)
-        campaign = self.tracker.start(
-            chosen,
+        campaign = self.send_start(
+            method,
             cycle_steps=cycle_steps,
             wave_size=wave_size,
             update_interval_s=update_interval_s,
@@ -374,7 +370,7 @@ class Swarm:
             )
         return Run(
             run_id=self.tracker.run_id,
-            method=chosen,
+            method=method_of(method),
             cycle_steps=cycle_steps,
             wave_size=wave_size,
             update_interval_s=update_interval_s,
@@ -467,8 +463,12 @@ class Swarm:
         update_interval_s: int = 0,
         phototaxis: bool = False,
     ) -> Campaign:
+        chosen = method_of(method)
+        check_value(Param.CYCLE_STEPS, cycle_steps, zero_keeps=True)
+        check_value(Param.WAVE_SIZE, wave_size, zero_keeps=True)
+        check_value(Param.UPDATE_INTERVAL_S, update_interval_s, zero_keeps=True)
         return self.tracker.start(
-            method_of(method),
+            chosen,
             cycle_steps=cycle_steps,
             wave_size=wave_size,
             update_interval_s=update_interval_s,

@@ -66,7 +66,7 @@ class DemoScript:
             self.failure = str(exc)
         else:
             if swarm.wait_until(lambda: self._every_s_n_in(run.run_id), self.estimate_timeout_s):
-                swarm.note(f"demo: every particle reported S_n: {self.s_n}")
+                swarm.note(f"demo: every particle reported S_n: {dict(sorted(self.s_n.items()))}")
                 swarm.sleep(self.locomote_s)
             else:
                 self.failure = f"only {len(self.s_n)} of {expected} particles reported S_n"

@@ -12,11 +12,11 @@ import time
 from pathlib import Path
 from typing import Self
 
-from particlebot.console.model import ConsoleModel
 from particlebot.logs.jsonl import JsonlWriter
 from particlebot.protocol import DEFINITION_HASH, Method, Start, Status, encode_frame
 from particlebot.radio import Packet, Radio, RadioUrl
 from particlebot.session import Listener, ReceivedFrame, Session
+from particlebot.swarm.tracker import SwarmTracker
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 LINK_BYTES_PER_S = 9600 / 10  # 8N1
@@ -72,12 +72,12 @@ def status_packets(count: int, senders: int = 10) -> list[Packet]:
 
 
 def receive_path(count: int, log_dir: Path) -> float:
-    """Frames per second through Session -> ConsoleModel + JsonlWriter (flushed per line)."""
+    """Frames per second through Session -> SwarmTracker + JsonlWriter (flushed per line)."""
     radio = _QueueRadio()
     counter = _Counter(count)
     writer = JsonlWriter(log_dir / "bench.jsonl", radio=radio.url)
     session = Session(radio, [counter, writer])
-    session.add_listener(ConsoleModel(session, radio.now))
+    session.add_listener(SwarmTracker(session, radio.now))
     packets = status_packets(count)
     with session:
         start = time.perf_counter()

@@ -1,1 +1,38 @@
-"""particlebot: firmware tooling, base-station console and virtual particles for particle robots."""
+"""particlebot: firmware tooling, base-station console and virtual particles for particle robots.
+
+Scripts drive a swarm through `particlebot.Swarm` (see README, "Experiments as code").
+"""
+
+from particlebot.protocol import Method, Param, State
+from particlebot.radio import RadioError
+from particlebot.swarm.api import Swarm
+from particlebot.swarm.results import (
+    IdInUse,
+    NotConfirmed,
+    ParamReport,
+    Particle,
+    ParticlesMissing,
+    Reply,
+    Run,
+    StopReport,
+    SwarmError,
+    Unconfirmed,
+)
+
+__all__ = [
+    "IdInUse",
+    "Method",
+    "NotConfirmed",
+    "Param",
+    "ParamReport",
+    "Particle",
+    "ParticlesMissing",
+    "RadioError",
+    "Reply",
+    "Run",
+    "State",
+    "StopReport",
+    "Swarm",
+    "SwarmError",
+    "Unconfirmed",
+]

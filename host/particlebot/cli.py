@@ -79,6 +79,9 @@ def build_parser() -> argparse.ArgumentParser:
     console = commands.add_parser("console", help="live table of every particle, with commands")
     _radio_options(console)
     console.add_argument("--no-log", action="store_true", help="do not write a session log")
+    console.add_argument(
+        "--fleet", help="fleet file: the roster every STOP must hear from (default ./fleet.toml)"
+    )
 
     log = commands.add_parser("log", help="record a radio to a log without the console")
     _radio_options(log)
@@ -149,9 +152,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--no-log", action="store_true", help="do not write a session log")
     _log_options(demo)
 
-    # Fleet tools: each module adds its own options.
+    # Fleet tools and experiments: each module adds its own options.
     from particlebot.commands import flash, radio
     from particlebot.commands import fleet as fleet_command
+    from particlebot.commands import run as run_command
 
     flash.add_arguments(commands.add_parser("flash", help="firmware and an id onto Fio v3 boards"))
     radio.add_arguments(commands.add_parser("radio", help="configure XBee radios for the fleet"))
@@ -162,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     for name in SELF_REGISTERING:
         importlib.import_module(f"particlebot.commands.{name}").add_parser(commands)
+    run_command.add_arguments(commands.add_parser("run", help="run an experiment file's trials"))
     return parser
 
 
@@ -179,7 +184,7 @@ def _dispatch(command: str) -> Callable[[argparse.Namespace], int]:
         from particlebot.commands.plot import run
     elif command == "replay":
         from particlebot.commands.replay import run
-    elif command in ("flash", "radio", "fleet"):
+    elif command in ("flash", "radio", "fleet", "run"):
         run = importlib.import_module(f"particlebot.commands.{command}").run
     else:
         from particlebot.commands.demo import run

@@ -178,6 +178,24 @@ class Session:
 
     # ---- receiving -------------------------------------------------------------------------
 
+    def pump(self) -> None:
+        """Delivers every packet the radio holds now, on the caller's thread, instead of a
+        receive thread (never both): a simulation stepped by its caller has all its packets
+        in the radio's queue as soon as a step returns, so the caller sees them in order and
+        the run is the same every time. RadioError if the radio failed."""
+        if self._thread is not None:
+            raise RuntimeError("pump() is for a session without a receive thread")
+        while not self._stop.is_set():
+            try:
+                packet = self.radio.receive(timeout=0)
+            except RadioError as exc:
+                self._fail(exc)
+                raise
+            if packet is None:
+                self._flush_stale(self.now())
+                return
+            self._handle(packet)
+
     def _run(self) -> None:
         while not self._stop.is_set():
             try:

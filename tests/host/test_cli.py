@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 
 from particlebot.cli import main
-from particlebot.commands._common import open_station
-from particlebot.commands.demo import DemoResult, DemoScript, Phase, unresolved_neighbours
+from particlebot.commands.demo import DemoResult, DemoScript, unresolved_neighbours
 from particlebot.console.app import ConsoleApp
 from particlebot.protocol import DEFINITION_HASH
 from particlebot.radio.virtual import VirtualRadio
+from particlebot.swarm.api import Swarm
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 
@@ -31,13 +31,11 @@ def test_the_demo_without_a_terminal_prints_a_summary_and_succeeds(
 
 
 def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
-    swarm = VirtualSwarm(SwarmConfig(count=5))
-    radio = VirtualRadio(swarm, url="virtual://5", speed=20.0)
-    base = open_station(radio, None)
-    script = DemoScript(base.model, swarm, cycle_steps=75, locomote_s=2.0)
-    app = ConsoleApp(
-        base.model, radio_name=radio.url, log_path=None, on_tick=script.poll, linger_s=0.1
-    )
+    world = VirtualSwarm(SwarmConfig(count=5))
+    radio = VirtualRadio(world, url="virtual://5", speed=20.0)
+    swarm = Swarm(radio, log_dir=None)
+    script = DemoScript(swarm, world, cycle_steps=75, locomote_s=2.0)
+    app = ConsoleApp(swarm, script=script, linger_s=0.1)
 
     async def run() -> int | None:
         async with app.run_test(size=(140, 40)) as pilot:
@@ -48,8 +46,8 @@ def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
     try:
         code = asyncio.run(asyncio.wait_for(run(), timeout=60))
     finally:
-        base.session.close()
-    assert script.phase is Phase.DONE
+        swarm.close()
+    assert script.stop_report is not None and script.stop_report.confirmed
     assert code == 0
     assert [r.s_n for r in script.results()] == [1, 2, 3, 4, 5]
 

@@ -12,30 +12,22 @@ from textual.widget import Widget
 from textual.widgets import DataTable, Input, RichLog, Static
 
 from particlebot.console.app import ConfirmScreen, ConsoleApp
-from particlebot.console.model import ConsoleModel
+from particlebot.fleet import Fleet, ParticleRecord
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
-from particlebot.session import Session
-from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
+from particlebot.swarm.api import Swarm
+from tests.host.fakes import FakeRadio, status_frame, wait_until
 
 
 def run_app(
     test: Callable[[Pilot[int], FakeRadio], Coroutine[Any, Any, None]],
     size: tuple[int, int] = (140, 40),
     read_only: bool = False,
+    fleet: Fleet | None = None,
 ) -> ConsoleApp:
     radio = FakeRadio()
-    recorder = Recorder()
-    session = Session(radio, [recorder])
-    model = ConsoleModel(session, radio.now)
-    session.add_listener(model)
-    session.start()
-    app = ConsoleApp(
-        model,
-        radio_name="fake://",
-        log_path="logs/test.jsonl",
-        refresh_s=0.05,
-        read_only=read_only,
-    )
+    # The console takes over particles it knows from the start here: no grace period.
+    swarm = Swarm(radio, log_dir=None, stop_grace=0, fleet=fleet)
+    app = ConsoleApp(swarm, log_path="logs/test.jsonl", refresh_s=0.05, read_only=read_only)
 
     async def body() -> None:
         async with app.run_test(size=size) as pilot:
@@ -44,7 +36,7 @@ def run_app(
     try:
         asyncio.run(body())
     finally:
-        session.close()
+        swarm.close()
     return app
 
 
@@ -381,3 +373,40 @@ def test_a_replay_offers_no_command_that_sends() -> None:
         assert not app.is_running
 
     run_app(test, read_only=True)
+
+
+# ---- a fleet -------------------------------------------------------------------------------------
+
+
+def test_with_a_fleet_the_console_shows_who_is_missing_unknown_or_duplicated() -> None:
+    fleet = Fleet.new()
+    for particle in (1, 2, 3, 4):
+        fleet.record(ParticleRecord(particle))
+
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        for particle in (1, 2):  # of the fleet's 1-4
+            radio.inject(status_frame(particle, state=int(State.CYCLING)))
+        radio.inject(status_frame(7, state=int(State.IDLE)))  # not in the fleet
+        assert wait_until(lambda: sum(row.heard for row in app.model.rows()) == 3)
+        # Two particles 2 on a transparent link: their uptimes cannot be one particle's.
+        radio.inject(status_frame(2, state=int(State.CYCLING), uptime_ms=900_000))
+        assert wait_until(lambda: any(row.duplicate for row in app.model.rows()))
+        await refreshed(pilot)
+        flags = {row["id"]: row["flags"] for row in table_text(app)}
+        assert flags == {
+            "1": "",
+            "2": "DUPLICATE",
+            "3": "NOT HEARD",
+            "4": "NOT HEARD",
+            "7": "NOT IN FLEET",
+        }
+        assert "3 particles of 4 in the fleet" in screen_lines(app.query_one("#status", Static))[0]
+        assert "DUPLICATE id 2" in log_text(app)
+        await pilot.press("colon")
+        app.query_one(Input).value = "forget 4"
+        await pilot.press("enter")
+        await refreshed(pilot)
+        assert [row["id"] for row in table_text(app)] == ["1", "2", "3", "7"]
+
+    run_app(test, size=(80, 24), fleet=fleet)

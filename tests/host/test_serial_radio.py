@@ -10,7 +10,6 @@ from pathlib import Path
 import pytest
 
 from particlebot.cli import main
-from particlebot.commands._common import open_station
 from particlebot.radio import (
     LinkEvent,
     LinkState,
@@ -21,6 +20,7 @@ from particlebot.radio import (
 )
 from particlebot.radio._port import translate_open_error
 from particlebot.radio.serial import SerialRadio, contains_api_frame
+from particlebot.swarm.api import Swarm
 from tests.host.ptys import VanishingPty
 from tests.host.xbee_emulator import api_frame
 
@@ -119,18 +119,18 @@ def test_closing_while_lost_does_not_hang(pty: VanishingPty) -> None:
 
 
 def test_a_console_on_a_silent_port_is_told_what_to_check(pty: VanishingPty) -> None:
-    base = open_station(f"serial://{pty.path}?baud=19200", None)
+    swarm = Swarm.open(f"serial://{pty.path}?baud=19200", log_dir=None)
     try:
-        hint = base.model.quiet_hint or ""
+        hint = swarm.tracker.quiet_hint or ""
         assert "19200 baud" in hint and "PAN ID" in hint and "channel" in hint
     finally:
-        base.session.close()
+        swarm.close()
 
 
 def test_a_recording_on_a_silent_port_prints_the_hint(
     pty: VanishingPty, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr("particlebot.console.model.QUIET_HINT_S", 0.2)
+    monkeypatch.setattr("particlebot.swarm.tracker.QUIET_HINT_S", 0.2)
     log_dir = pty.path.parent / "logs"
     argv = ["log", "--radio", f"serial://{pty.path}", "--log-dir", str(log_dir), "--duration", "1"]
     assert main(argv) == 0

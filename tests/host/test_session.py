@@ -5,10 +5,10 @@ from __future__ import annotations
 import contextlib
 import threading
 
-from particlebot.console.model import ConsoleModel
 from particlebot.protocol import DropReason, Ping, State, Stop, encode_frame
 from particlebot.radio import LinkState, RadioError
 from particlebot.session import Listener, ReceivedFrame, SentFrame, Session
+from particlebot.swarm.tracker import SwarmTracker
 from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
 
 
@@ -154,7 +154,7 @@ def test_commands_never_go_out_from_the_receive_thread(fake_radio: FakeRadio) ->
             senders.append(threading.current_thread().name)
 
     session = Session(fake_radio, [SendingThreads()])
-    model = ConsoleModel(session, fake_radio.now)
+    model = SwarmTracker(session, fake_radio.now)
     session.add_listener(model)
     with session:
         fake_radio.inject(status_frame(1, state=int(State.CYCLING)))

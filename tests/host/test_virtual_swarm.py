@@ -6,11 +6,11 @@ import math
 
 import pytest
 
-from particlebot.console.model import ConsoleModel
 from particlebot.protocol import Method, Start, State, encode_frame
 from particlebot.radio import InvalidRadioUrlError, LinkState, open_radio
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.session import Session
+from particlebot.swarm.tracker import SwarmTracker
 from particlebot.virtual.swarm import FirmwareParticle, SwarmConfig, VirtualSwarm, native_factory
 from tests.host.fakes import wait_until
 
@@ -19,7 +19,7 @@ def test_method_d_gives_every_particle_its_rank_by_distance_and_stop_is_confirme
     radio = open_radio("virtual://8?speed=max&start=0.2&seed=3")
     assert isinstance(radio, VirtualRadio)
     session = Session(radio)
-    model = ConsoleModel(session, radio.now)
+    model = SwarmTracker(session, radio.now)
     session.add_listener(model)
     with session:
         assert wait_until(lambda: len(model.rows()) == 8, timeout=20)

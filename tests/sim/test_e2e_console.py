@@ -1,33 +1,13 @@
-"""The console's `emulated://K` radio: URL checks, and a console session driving the swarm."""
+"""The `emulated://K` radio: URL checks, and the Swarm API driving emulated particles."""
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-
 import pytest
 
-from particlebot.commands._common import station
-from particlebot.protocol import Method, State
+from particlebot.protocol import State
 from particlebot.radio import InvalidRadioUrlError, RadioError, open_radio, parse_radio_url
 from particlebot.radio.emulated import swarm_config_from_url
-
-
-def wait_for(
-    condition: Callable[[], bool], timeout_s: float, poll: Callable[[], None], every_s: float = 0.5
-) -> bool:
-    """Calls poll every every_s (a PING, or the console's campaign step) until condition() holds
-    or timeout_s of wall time pass."""
-    end = time.monotonic() + timeout_s
-    next_poll = 0.0
-    while time.monotonic() < end:
-        if time.monotonic() >= next_poll:
-            poll()
-            next_poll = time.monotonic() + every_s
-        if condition():
-            return True
-        time.sleep(0.02)
-    return condition()
+from particlebot.swarm.api import Swarm
 
 
 @pytest.mark.parametrize(
@@ -66,25 +46,22 @@ def test_a_missing_firmware_image_is_reported_with_the_command_that_builds_it() 
 
 
 @pytest.mark.usefixtures("built_images")
-def test_console_session_finds_starts_and_stops_emulated_particles() -> None:
-    with station("emulated://3?speed=max", None) as base:
-        model = base.model
+def test_the_swarm_api_finds_starts_and_stops_emulated_particles_at_20_percent_loss() -> None:
+    # speed=max: the calls below step the emulated swarm themselves, as fast as it runs.
+    with Swarm.open("emulated://3?speed=max&loss=0.2&seed=2", log_dir=None) as swarm:
+        heard = swarm.wait_for(count=3, timeout=30)
+        assert [p.id for p in heard] == [1, 2, 3]
+        report = swarm.set("cycle_steps", 75)
+        assert report.values == {1: 75, 2: 75, 3: 75}
+        run = swarm.start("D")
+        assert run.particles == (1, 2, 3)
 
-        def ids() -> list[int]:
-            return sorted(row.id for row in model.rows())
+        def ranked() -> bool:
+            return all(p.run_id == run.run_id and p.s_n for p in swarm.particles())
 
-        assert wait_for(lambda: ids() == [1, 2, 3], 60, model.ping), ids()
-        start = model.start(Method.COUNTING, cycle_steps=75)
-        assert wait_for(lambda: start.done, 60, model.poll, 0.05), start.outcome
-        assert start.success, start.outcome
-
-        def estimated() -> bool:
-            rows = model.rows()
-            return all(row.status is not None and row.status.s_n > 0 for row in rows)
-
-        assert wait_for(estimated, 60, model.ping)
-        assert [row.status.s_n for row in model.rows() if row.status] == [1, 2, 3]
-        stop = model.stop()
-        assert wait_for(lambda: stop.done, 60, model.poll, 0.05), stop.outcome
-        assert stop.success, stop.outcome
-        assert all(row.state == State.IDLE for row in model.rows())
+        assert swarm.wait_until(ranked, timeout=30)
+        assert [p.s_n for p in swarm.particles()] == [1, 2, 3]
+        stop = swarm.stop()
+        assert stop.confirmed, stop.text
+        assert stop.stopped == (1, 2, 3)
+        assert all(p.state == State.IDLE for p in swarm.particles())

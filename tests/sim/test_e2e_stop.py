@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import pytest
 
-from particlebot.console.model import ConsoleModel
 from particlebot.protocol import (
     BASE_STATION_ID,
     PARAM_SPECS,
@@ -27,6 +26,7 @@ from particlebot.sim import BASE, CPU_HZ, AirPacket, EmulatedSwarm, SwarmConfig,
 from particlebot.sim.harness import ServoPulse
 from particlebot.sim.servo import contracted_width
 from particlebot.sim.swarm import packet_frames
+from particlebot.swarm.tracker import SwarmTracker
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -52,7 +52,7 @@ class Console:
     def __init__(self, swarm: EmulatedSwarm) -> None:
         self.swarm = swarm
         self.seq = itertools.count()
-        self.model = ConsoleModel(self, lambda: swarm.time_s)
+        self.model = SwarmTracker(self, lambda: swarm.time_s)
         self.sent: list[tuple[float, bytes]] = []
         self.decoder = StreamDecoder()
         swarm.add_base_listener(self._on_packet)

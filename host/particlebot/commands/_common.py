@@ -1,4 +1,4 @@
-"""What the radio subcommands share: opening the radio, session, log writer and console model."""
+"""What the radio subcommands share: a Swarm opened for the command line, headless loops."""
 
 from __future__ import annotations
 
@@ -7,28 +7,12 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 
-from particlebot.console.model import ConsoleModel
-from particlebot.logs.jsonl import JsonlWriter, default_log_path
-from particlebot.radio import Radio, open_radio
-from particlebot.session import Session
-
-
-@dataclass
-class Station:
-    """A running base station: radio, receive thread, log and console model."""
-
-    radio: Radio
-    session: Session
-    model: ConsoleModel
-    log: JsonlWriter | None
-
-    @property
-    def log_path(self) -> Path | None:
-        return None if self.log is None else self.log.path
+from particlebot.fleet import Fleet
+from particlebot.radio import Radio
+from particlebot.swarm.api import Swarm
 
 
 def has_terminal() -> bool:
@@ -41,36 +25,24 @@ def fail(message: str) -> int:
     return 2
 
 
-def open_station(radio: Radio | str, log_dir: Path | None, *, fsync: bool = False) -> Station:
-    """Opens the radio (RadioError on failure), starts logging (unless log_dir is None) and the
-    receive thread."""
-    radio = open_radio(radio) if isinstance(radio, str) else radio
-    try:
-        session = Session(radio)
-        log = None
-        if log_dir is not None:
-            log = JsonlWriter(
-                default_log_path(log_dir), radio=radio.url, fsync=fsync, clock=radio.now
-            )
-            session.add_listener(log)
-        model = ConsoleModel(session, radio.now, quiet_hint=radio.quiet_hint)
-        session.add_listener(model)
-    except BaseException:
-        radio.close()
-        raise
-    session.start()
-    return Station(radio, session, model, log)
-
-
 @contextmanager
-def station(radio: Radio | str, log_dir: Path | None, *, fsync: bool = False) -> Iterator[Station]:
-    opened = open_station(radio, log_dir, fsync=fsync)
+def opened_swarm(
+    radio: Radio | str,
+    log_dir: Path | None,
+    *,
+    fsync: bool = False,
+    fleet: Fleet | Path | None = None,
+    stepped: bool | None = None,
+) -> Iterator[Swarm]:
+    """Swarm.open (RadioError, LogError or FleetFileError on failure); closed on the way out,
+    and the log's path printed, so a person always learns where the session went."""
+    swarm = Swarm.open(radio, log_dir=log_dir, fsync=fsync, fleet=fleet, stepped=stepped)
     try:
-        yield opened
+        yield swarm
     finally:
-        opened.session.close()
-        if opened.log_path is not None:
-            print(f"Log: {opened.log_path}")
+        swarm.close()
+        if swarm.log_path is not None:
+            print(f"Log: {swarm.log_path}")
 
 
 @contextmanager
@@ -88,20 +60,22 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 
 def run_headless(
-    model: ConsoleModel,
+    swarm: Swarm,
     until: Callable[[], int | None],
     *,
     report: Callable[[], None] | None = None,
     report_every_s: float = 10.0,
 ) -> int:
-    """Polls the model until until() gives an exit code; report() every report_every_s."""
+    """Polls the swarm until until() gives an exit code; report() every report_every_s of wall
+    time. A simulation stepped by the swarm runs as fast as it can meanwhile."""
     next_report = time.monotonic() + report_every_s
     while True:
-        model.poll()
+        swarm.poll()
         code = until()
         if code is not None:
             return code
         if report is not None and time.monotonic() >= next_report:
             report()
             next_report = time.monotonic() + report_every_s
-        time.sleep(0.05)
+        if not swarm.stepped:
+            time.sleep(swarm.poll_wall_s)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from particlebot.commands._common import fail, has_terminal, station
+from particlebot.commands._common import fail, has_terminal, opened_swarm
 from particlebot.console.app import ConsoleApp
+from particlebot.fleet import DEFAULT_FLEET_FILE, FleetFileError
 from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError, parse_radio_url
 
@@ -27,19 +28,23 @@ def run(args: argparse.Namespace) -> int:
             "the console needs a terminal; to record without one: particlebot log --radio URL"
         )
     try:
-        with station(args.radio, _log_dir(args), fsync=args.fsync) as base:
-            app = ConsoleApp(
-                base.model,
-                radio_name=base.radio.url,
-                log_path=None if base.log_path is None else str(base.log_path),
-            )
+        with opened_swarm(
+            args.radio, _log_dir(args), fsync=args.fsync, fleet=fleet_file(args), stepped=False
+        ) as swarm:
             try:
-                code = app.run()
+                code = ConsoleApp(swarm).run()
             except KeyboardInterrupt:
                 code = 0
             return code or 0
-    except (RadioError, LogError) as exc:
+    except (RadioError, LogError, FleetFileError) as exc:
         return fail(str(exc))
+
+
+def fleet_file(args: argparse.Namespace) -> Path | None:
+    """--fleet FILE, else the experiment folder's fleet.toml if there is one."""
+    if args.fleet is not None:
+        return Path(args.fleet)
+    return DEFAULT_FLEET_FILE if DEFAULT_FLEET_FILE.exists() else None
 
 
 def _log_dir(args: argparse.Namespace) -> Path | None:

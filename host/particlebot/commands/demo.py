@@ -3,28 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import enum
 import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from particlebot.commands._common import fail, has_terminal, run_headless, station
+from particlebot.commands._common import fail, has_terminal, opened_swarm
 from particlebot.commands.plot import write_plot
 from particlebot.console.app import ConsoleApp
-from particlebot.console.model import Campaign, ConsoleModel, state_name
 from particlebot.logs.jsonl import LogError
-from particlebot.protocol import PARAM_SPECS, Method, Param, State
+from particlebot.protocol import PARAM_SPECS, Param, State
 from particlebot.radio import RadioError
 from particlebot.radio.virtual import VirtualRadio
+from particlebot.swarm.api import Swarm
+from particlebot.swarm.results import NotConfirmed, ParticlesMissing, StopReport, SwarmError
 from particlebot.virtual.swarm import ParticleSnapshot, SwarmConfig, VirtualSwarm
-
-
-class Phase(enum.Enum):
-    LISTEN = "waiting to hear every particle"
-    ESTIMATE = "START sent; waiting for every S_n"
-    LOCOMOTE = "particles cycling"
-    STOP = "STOP sent; waiting for every particle to confirm"
-    DONE = "done"
 
 
 @dataclass
@@ -44,96 +36,77 @@ class DemoResult:
 
 @dataclass
 class DemoScript:
-    """The demo's steps, driven by poll() from the console's timer or a headless loop.
+    """The demo, written against the Swarm API as any script would be: wait for every particle,
+    START (method D), wait for every S_n, let the line creep towards the lamp, STOP. It runs on
+    the console's script thread, or directly without a terminal; all times are the radio's
+    (simulated) clock, so it does the same at any speed."""
 
-    All times are the radio's (simulated) clock, so the script does the same at any speed.
-    """
-
-    model: ConsoleModel
-    swarm: VirtualSwarm
+    swarm: Swarm
+    world: VirtualSwarm
     cycle_steps: int = 100
     locomote_s: float = 12.0
     listen_timeout_s: float = 5.0
     estimate_timeout_s: float = 15.0
-    phase: Phase = Phase.LISTEN
-    started_at: float | None = None
-    phase_at: float | None = None
     start_snapshot: list[ParticleSnapshot] = field(default_factory=list)
     s_n: dict[int, int] = field(default_factory=dict)
-    stop_campaign: Campaign | None = None
+    stop_report: StopReport | None = None
     failure: str | None = None
-    exit_code: int | None = None
 
-    def poll(self) -> int | None:
-        now = self.model.clock()
-        if self.started_at is None:
-            self.started_at = self.phase_at = now
-        assert self.phase_at is not None
-        in_phase = now - self.phase_at
-        expected = len(self.swarm.members)
-        if self.phase is Phase.LISTEN:
-            heard = sum(1 for row in self.model.rows() if row.status is not None)
-            if heard >= expected or in_phase > self.listen_timeout_s:
-                self.start_snapshot = self.swarm.snapshot()
-                self.model.start(Method.COUNTING, cycle_steps=self.cycle_steps)
-                self._enter(Phase.ESTIMATE, now)
-        elif self.phase is Phase.ESTIMATE:
-            run_id = self.model.run_id
-            for row in self.model.rows():
-                status = row.status
-                if (
-                    status is not None
-                    and status.run_id == run_id
-                    and status.s_n
-                    and status.state not in (State.IDLE, State.ESTIMATING)
-                ):
-                    self.s_n[row.id] = status.s_n
-            if len(self.s_n) >= expected:
-                self.model.note(f"demo: every particle reported S_n: {self.s_n}")
-                self._enter(Phase.LOCOMOTE, now)
-            elif in_phase > self.estimate_timeout_s:
+    def __call__(self) -> int:
+        swarm = self.swarm
+        expected = len(self.world.members)
+        try:
+            swarm.wait_for(count=expected, timeout=self.listen_timeout_s)
+        except ParticlesMissing as exc:
+            swarm.note(f"demo: {exc}; starting those heard")
+        self.start_snapshot = self.world.snapshot()
+        try:
+            run = swarm.start("D", cycle_steps=self.cycle_steps)
+        except NotConfirmed as exc:
+            self.failure = str(exc)
+        else:
+            if swarm.wait_until(lambda: self._every_s_n_in(run.run_id), self.estimate_timeout_s):
+                swarm.note(f"demo: every particle reported S_n: {dict(sorted(self.s_n.items()))}")
+                swarm.sleep(self.locomote_s)
+            else:
                 self.failure = f"only {len(self.s_n)} of {expected} particles reported S_n"
-                self._begin_stop(now)
-        elif self.phase is Phase.LOCOMOTE:
-            if in_phase >= self.locomote_s:
-                self._begin_stop(now)
-        elif self.phase is Phase.STOP:
-            assert self.stop_campaign is not None
-            if self.stop_campaign.done:
-                if not self.stop_campaign.success and self.failure is None:
-                    self.failure = self.stop_campaign.outcome
-                self._enter(Phase.DONE, now)
-                self.exit_code = 0 if self.failure is None and self.all_ranks_match() else 1
-        return self.exit_code
+        self.stop_report = swarm.stop()
+        if not self.stop_report.confirmed and self.failure is None:
+            self.failure = self.stop_report.text
+        return 0 if self.failure is None and self.all_ranks_match() else 1
 
-    def _begin_stop(self, now: float) -> None:
-        self.stop_campaign = self.model.stop()
-        self._enter(Phase.STOP, now)
-
-    def _enter(self, phase: Phase, now: float) -> None:
-        self.phase = phase
-        self.phase_at = now
+    def _every_s_n_in(self, run_id: int) -> bool:
+        for particle in self.swarm.particles():
+            if (
+                particle.run_id == run_id
+                and particle.s_n
+                and particle.state not in (None, State.IDLE, State.ESTIMATING)
+            ):
+                self.s_n[particle.id] = particle.s_n
+        return len(self.s_n) >= len(self.world.members)
 
     def results(self) -> list[DemoResult]:
         """One line per particle, ranked by distance to the lamp when START went out."""
-        before = self.start_snapshot or self.swarm.snapshot()
-        after = {p.id: p for p in self.swarm.snapshot()}
+        before = self.start_snapshot or self.world.snapshot()
+        after = {p.id: p for p in self.world.snapshot()}
         ranked = sorted(before, key=lambda p: p.ground_distance)
-        rows = {row.id: row for row in self.model.rows()}
+        heard = {particle.id: particle for particle in self.swarm.particles()}
         results = []
-        for rank, particle in enumerate(ranked, start=1):
-            row = rows.get(particle.id)
-            state = state_name(row.status.state) if row and row.status else "unheard"
-            end = after.get(particle.id, particle)
+        for rank, snapshot in enumerate(ranked, start=1):
+            particle = heard.get(snapshot.id)
+            state = "unheard"
+            if particle is not None and particle.state is not None:
+                state = particle.state.name
+            end = after.get(snapshot.id, snapshot)
             results.append(
                 DemoResult(
-                    particle_id=particle.id,
-                    start_distance=particle.ground_distance,
+                    particle_id=snapshot.id,
+                    start_distance=snapshot.ground_distance,
                     end_distance=end.ground_distance,
                     rank=rank,
-                    s_n=self.s_n.get(particle.id),
+                    s_n=self.s_n.get(snapshot.id),
                     state=state,
-                    intensity=row.status.intensity if row and row.status else None,
+                    intensity=None if particle is None else particle.intensity,
                 )
             )
         return results
@@ -156,8 +129,8 @@ def summary(script: DemoScript) -> str:
     moved = [r.start_distance - r.end_distance for r in script.results()]
     if moved:
         lines.append(f"the line moved {sum(moved) / len(moved) * 1000:.0f} mm towards the lamp")
-    if script.stop_campaign is not None:
-        lines.append(script.stop_campaign.outcome)
+    if script.stop_report is not None:
+        lines.append(script.stop_report.text)
     if script.failure:
         lines.append(f"FAILED: {script.failure}")
     verdict = "every S_n equals the particle's rank by distance to the lamp"
@@ -192,27 +165,22 @@ def run(args: argparse.Namespace) -> int:
     speed = args.speed if args.speed is not None else (2.0 if ui else 20.0)
     config = SwarmConfig(count=args.particles, seed=args.seed)
     try:
-        swarm = VirtualSwarm(config)
+        world = VirtualSwarm(config)
     except (OSError, ImportError) as exc:
         return fail(
             f"the virtual particles need the native firmware library ({exc}); run: make native"
         )
-    radio = VirtualRadio(swarm, url=f"virtual://{args.particles}?speed={speed:g}", speed=speed)
+    radio = VirtualRadio(world, url=f"virtual://{args.particles}?speed={speed:g}", speed=speed)
     log_dir = None if args.no_log else Path(args.log_dir)
     log_path: Path | None = None
     try:
-        with station(radio, log_dir) as base:
-            log_path = base.log_path
-            script = DemoScript(base.model, swarm, locomote_s=args.run_s)
+        # A person watches the console: the simulation keeps its pace on its own thread.
+        with opened_swarm(radio, log_dir, stepped=False if ui else None) as swarm:
+            log_path = swarm.log_path
+            script = DemoScript(swarm, world, locomote_s=args.run_s)
             if ui:
-                app = ConsoleApp(
-                    base.model,
-                    radio_name=radio.url,
-                    log_path=None if base.log_path is None else str(base.log_path),
-                    on_tick=script.poll,
-                )
                 try:
-                    code = app.run()
+                    code = ConsoleApp(swarm, script=script).run()
                 except KeyboardInterrupt:
                     return 130
                 code = 130 if code is None else code
@@ -223,12 +191,12 @@ def run(args: argparse.Namespace) -> int:
                     flush=True,
                 )
                 try:
-                    code = run_headless(base.model, script.poll)
+                    code = script()
                 except KeyboardInterrupt:
                     return 130
             print(summary(script))
-            print(f"simulated {swarm.t:.1f} s at {swarm.achieved_speed:.1f}x real time")
-    except (RadioError, LogError) as exc:
+            print(f"simulated {world.t:.1f} s at {world.achieved_speed:.1f}x real time")
+    except (RadioError, LogError, SwarmError) as exc:
         return fail(str(exc))
     # Drawn once the log is closed, so it holds the whole session; a failed plot is reported but
     # does not turn a good demo into a failed one.

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
-from particlebot.commands._common import fail, run_headless, sigterm_as_interrupt, station
+from particlebot.commands._common import fail, opened_swarm, run_headless, sigterm_as_interrupt
 from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError
 
@@ -17,31 +16,30 @@ def run(args: argparse.Namespace) -> int:
     try:
         with (
             sigterm_as_interrupt(),
-            station(args.radio, Path(args.log_dir), fsync=args.fsync) as base,
+            opened_swarm(args.radio, Path(args.log_dir), fsync=args.fsync) as swarm,
         ):
-            print(f"Recording {base.radio.url} to {base.log_path}; Ctrl-C ends.", flush=True)
-            deadline = None if args.duration is None else time.monotonic() + args.duration
+            print(f"Recording {swarm.url} to {swarm.log_path}; Ctrl-C ends.", flush=True)
+            deadline = None if args.duration is None else swarm.now() + args.duration
+            tracker = swarm.tracker
 
             def until() -> int | None:
                 # Without a console, warnings (a silent port, a reset, a foreign firmware) would
                 # go unseen until someone reads the log.
-                for note in base.model.new_notes():
+                for note in tracker.new_notes():
                     if note.level != "info":
                         print(f"{note.level}: {note.text}", flush=True)
-                if base.session.error is not None:
-                    return fail(str(base.session.error))
-                if deadline is not None and time.monotonic() >= deadline:
+                if swarm.session.error is not None:
+                    return fail(str(swarm.session.error))
+                if deadline is not None and swarm.now() >= deadline:
                     return 0
                 return None
 
             def report() -> None:
-                print(
-                    f"{len(base.model.particles)} particles  {base.model.counters_text()}",
-                    flush=True,
-                )
+                heard = sum(1 for row in tracker.rows() if row.heard)
+                print(f"{heard} particles  {tracker.counters_text()}", flush=True)
 
             try:
-                return run_headless(base.model, until, report=report)
+                return run_headless(swarm, until, report=report)
             except KeyboardInterrupt:
                 return 0
     except (RadioError, LogError) as exc:

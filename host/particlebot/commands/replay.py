@@ -6,12 +6,12 @@ import argparse
 import math
 from pathlib import Path
 
-from particlebot.commands._common import fail, has_terminal, run_headless, station
+from particlebot.commands._common import fail, has_terminal, opened_swarm, run_headless
 from particlebot.console.app import ConsoleApp
-from particlebot.console.model import state_name
 from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
 from particlebot.radio import RadioError
+from particlebot.swarm.campaigns import state_name
 
 PROGRESS_EVERY_S = 2.0
 """How often a replay without the console says how far it got."""
@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
         radio = ReplayRadio(Path(args.log), speed)
     except (RadioError, LogError) as exc:
         return fail(str(exc))
-    with station(radio, None) as base:
+    with opened_swarm(radio, None) as swarm:
         if ui:
             announced = False
 
@@ -33,12 +33,11 @@ def run(args: argparse.Namespace) -> int:
                 nonlocal announced
                 if radio.finished and not announced:
                     announced = True
-                    base.model.note(f"Replay of {args.log} finished; q quits")
+                    swarm.note(f"Replay of {args.log} finished; q quits")
                 return None
 
             app = ConsoleApp(
-                base.model,
-                radio_name=radio.url,
+                swarm,
                 log_path=str(args.log),
                 on_tick=tick,
                 read_only=True,
@@ -60,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
 
         try:
             run_headless(
-                base.model,
+                swarm,
                 lambda: 0 if radio.finished else None,
                 report=progress,
                 report_every_s=PROGRESS_EVERY_S,
@@ -68,10 +67,10 @@ def run(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             return 0
         # Let the receive thread hand over the last packets before summarising.
-        base.session.close()
+        swarm.session.close()
         print(f"Replayed {radio.total_packets} packets from {args.log}")
-        print(base.model.counters_text())
-        for row in base.model.rows():
+        print(swarm.tracker.counters_text())
+        for row in swarm.tracker.rows():
             status = row.status
             print(
                 f"particle {row.id:>3}  state {state_name(status.state) if status else '?':<11}"

@@ -1,8 +1,9 @@
-"""The live console (Textual): a table of every particle heard, messages, and a command line."""
+"""The live console (Textual) on the Swarm API: a table of every particle, messages, commands."""
 
 from __future__ import annotations
 
 import contextlib
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
@@ -17,10 +18,14 @@ from textual.screen import ModalScreen
 from textual.widgets import DataTable, Footer, Input, RichLog, Static
 
 from particlebot.console.commands import COMMANDS, CommandError, Prepared, help_text, prepare
-from particlebot.console.model import Campaign, ConsoleModel, ParticleRow, ids_text, state_name
 from particlebot.protocol import UNASSIGNED_ID
-from particlebot.radio import LinkState
+from particlebot.radio import LinkState, RadioError
 from particlebot.resets import reset_cause
+from particlebot.swarm.api import Swarm
+from particlebot.swarm.campaigns import Campaign, ids_text, state_name
+from particlebot.swarm.results import SwarmError
+from particlebot.swarm.roster import ParticleRow
+from particlebot.swarm.tracker import SwarmTracker
 
 
 @dataclass(frozen=True)
@@ -52,14 +57,14 @@ COLUMNS = [
 # The table's vertical scrollbar.
 SCROLLBAR = 2
 
-# How often the model's campaigns are advanced: a STOP copy goes out at most this late, and the
+# How often the swarm's campaigns are advanced: a STOP copy goes out at most this late, and the
 # last of the burst must leave within ~0.35 s of the command for every servo to be contracted
 # within 1 s.
 POLL_S = 0.05
 
 WELCOME = (
     "Keys: s start  x STOP  p set parameter  i identify  d set id  : command line  ? help  "
-    "q quit.  Type 'help' in the command line for every command."
+    "q quit.  Type 'help' in the command line for every command (forget, setid ... force)."
 )
 REPLAY_WELCOME = (
     "A replay of a log: the table shows what was heard; nothing can be sent.  Keys: ? help  q quit"
@@ -94,24 +99,13 @@ def _id_order(cell: Text) -> int:
     return int(cell.plain) if cell.plain.isdigit() else 256
 
 
-def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Text]:
+def row_cells(row: ParticleRow, now: float, tracker: SwarmTracker) -> dict[str, Text]:
     """The table cells of one particle, flags styled so they stand out."""
     status = row.status
-    silent = row.silent(now, model.silent_after)
-    mismatch = row.hash_mismatch(model.host_hash)
+    silent = row.silent(now, tracker.silent_after) or not row.heard
+    mismatch = row.hash_mismatch(tracker.host_hash)
     age = max(0.0, now - row.last_heard)
-    flags: list[str] = []
-    if row.reset_in_run is not None:
-        flags.append(f"RESET in run {row.reset_in_run}")
-    if silent:
-        flags.append(f"SILENT {age:.0f}s")
-    if mismatch:
-        flags.append("HASH MISMATCH")
-    if row.id == UNASSIGNED_ID:
-        flags.append("NO ID")
-    if status is not None and status.sensor_faults:
-        bad = [str(k) for k in range(6) if status.sensor_faults >> k & 1]
-        flags.append("SENSOR A" + ",A".join(bad))
+    flags = row.flags(now, tracker.silent_after, tracker.host_hash)
     dim = "dim" if silent else ""
     resets = ""
     if status is not None:
@@ -131,7 +125,7 @@ def row_cells(row: ParticleRow, now: float, model: ConsoleModel) -> dict[str, Te
         ),
         "bad": Text(str(row.bad_frames) if row.bad_frames is not None else "", style=dim),
         "resets": Text(resets, style="bold red" if row.reset_in_run is not None else dim),
-        "heard": Text(f"{age:.1f}s", style="bold red" if silent else ""),
+        "heard": Text(f"{age:.1f}s" if row.heard else "never", style="bold red" if silent else ""),
         "flags": Text(" ".join(flags), style="bold red" if flags else ""),
     }
     return cells
@@ -177,9 +171,11 @@ class ConfirmScreen(ModalScreen[str]):
 
 
 class ConsoleApp(App[int]):
-    """Shows a ConsoleModel and sends its commands. `on_tick` (if given) runs with every poll
-    of the model (POLL_S) and ends the app when it returns an exit code (the demo's script uses
-    this). read_only (a replay): nothing can be sent, and the keys that send are not offered."""
+    """Shows what a Swarm knows and sends its commands. `on_tick` (if given) runs with every
+    poll (POLL_S) and ends the app when it returns an exit code. `script` (if given) runs on a
+    thread of its own, driving the swarm through the blocking API while the console shows it
+    (the demo); its return value ends the app. read_only (a replay): nothing can be sent, and
+    the keys that send are not offered."""
 
     TITLE = "particlebot console"
     # The command palette offers nothing here and would take a place in the footer.
@@ -208,20 +204,24 @@ class ConsoleApp(App[int]):
 
     def __init__(
         self,
-        model: ConsoleModel,
+        swarm: Swarm,
         *,
-        radio_name: str,
-        log_path: str | None,
+        radio_name: str | None = None,
+        log_path: str | None = None,
         on_tick: Callable[[], int | None] | None = None,
+        script: Callable[[], int] | None = None,
         linger_s: float = 3.0,
         refresh_s: float = 0.25,
         read_only: bool = False,
     ) -> None:
         super().__init__()
-        self.model = model
-        self.radio_name = radio_name
+        self.swarm = swarm
+        self.radio_name = radio_name or swarm.url
+        if log_path is None and swarm.log_path is not None:
+            log_path = str(swarm.log_path)
         self.log_path = log_path
         self.on_tick = on_tick
+        self.script = script
         self.linger_s = linger_s
         self.refresh_s = refresh_s
         self.read_only = read_only
@@ -254,6 +254,30 @@ class ConsoleApp(App[int]):
         self.refresh_view()
         self.set_interval(self.refresh_s, self.refresh_view)
         self.set_interval(POLL_S, self._tick)
+        if self.script is not None:
+            threading.Thread(target=self._run_script, name="console-script", daemon=True).start()
+
+    @property
+    def model(self) -> SwarmTracker:
+        """What the swarm knows: the rows, notes and campaigns the console shows."""
+        return self.swarm.tracker
+
+    def _run_script(self) -> None:
+        assert self.script is not None
+        try:
+            code = self.script()
+        except (SwarmError, RadioError) as exc:
+            if self.swarm.closed:
+                return  # the console was left first
+            self.model.note(str(exc), "error")
+            code = 1
+        with contextlib.suppress(RuntimeError):  # the app has ended already
+            self.call_from_thread(self._end_after_linger, code)
+
+    def _end_after_linger(self, code: int) -> None:
+        if not self._ending:
+            self._ending = True
+            self.set_timer(self.linger_s, lambda: self.exit(code))
 
     def on_resize(self, event: events.Resize) -> None:
         self._fit_columns(event.size.width)
@@ -265,14 +289,14 @@ class ConsoleApp(App[int]):
     # ---- periodic --------------------------------------------------------------------------
 
     def _tick(self) -> None:
-        self.model.poll()
+        with contextlib.suppress(RadioError):  # the status bar shows a failed radio
+            self.swarm.poll()
         if self._quit_after is not None and self._quit_after.done:
             self.exit(0)
         if self.on_tick is not None and not self._ending:
             code = self.on_tick()
             if code is not None:
-                self._ending = True
-                self.set_timer(self.linger_s, lambda: self.exit(code))
+                self._end_after_linger(code)
 
     def refresh_view(self) -> None:
         # A timer may fire while the app is shutting down and its widgets are gone.
@@ -285,10 +309,13 @@ class ConsoleApp(App[int]):
         if model.link is not None and model.link.state in (LinkState.LOST, LinkState.CLOSED):
             link = Text(model.link.state.value.upper(), style="bold red")
         rows = model.rows()
-        silent = sum(1 for row in rows if row.silent(model.clock(), model.silent_after))
-        count = f"{len(rows)} particle{'' if len(rows) == 1 else 's'}"
+        heard = [row for row in rows if row.heard]
+        silent = sum(1 for row in heard if row.silent(model.clock(), model.silent_after))
+        count = f"{len(heard)} particle{'' if len(heard) == 1 else 's'}"
         if silent:
             count += f" ({silent} silent)"
+        if model.roster is not None:
+            count += f" of {len(model.roster)} in the fleet"
         # Each line is cut rather than wrapped: a wrapped first line would push the counters of
         # bad frames out of the two lines the bar has.
         text = Text.assemble(
@@ -318,7 +345,12 @@ class ConsoleApp(App[int]):
         self.query_one("#status", Static).update(self._status_text())
         table = self.query_one("#table", DataTable)
         added = False
-        for row in model.rows():
+        rows = model.rows()
+        # A renamed or forgotten particle's row goes.
+        for key in set(self._rows) - {row.key for row in rows}:
+            table.remove_row(key)
+            del self._rows[key]
+        for row in rows:
             cells = row_cells(row, now, model)
             shown = self._rows.get(row.key)
             if shown is None:
@@ -434,7 +466,7 @@ class ConsoleApp(App[int]):
             return
         self._write(f"> {line}", "bold cyan")
         try:
-            prepared = prepare(self.model, line)
+            prepared = prepare(self.swarm, line)
         except CommandError as exc:
             self._write(str(exc), "bold red")
             return
@@ -477,7 +509,11 @@ class ConsoleApp(App[int]):
         self.push_screen(ConfirmScreen(f"{who} in a run. {question}", choices), answered)
 
     def _carry_out(self, prepared: Prepared) -> None:
-        reply = prepared.run()
+        try:
+            reply = prepared.run()
+        except CommandError as exc:
+            self._write(str(exc), "bold red")
+            return
         if reply:
             self._write(reply)
         self.refresh_view()

@@ -1,4 +1,4 @@
-"""The console's command line: parses what a person types and calls the model (no UI here)."""
+"""The console's command line: parses what a person types and calls the Swarm API (no UI here)."""
 
 from __future__ import annotations
 
@@ -6,16 +6,11 @@ import shlex
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from particlebot.console.model import ConsoleModel
 from particlebot.protocol import BROADCAST_ID, PARAM_SPECS, Method, Param
+from particlebot.swarm.api import METHODS, Swarm
+from particlebot.swarm.results import SwarmError
 
-METHOD_NAMES: dict[str, Method] = {
-    "a": Method.DIRECT,
-    "b": Method.LINEAR,
-    "c": Method.NONLINEAR,
-    "d": Method.COUNTING,
-    **{method.name.lower(): method for method in Method},
-}
+METHOD_NAMES: dict[str, Method] = METHODS
 
 
 class CommandError(ValueError):
@@ -61,7 +56,14 @@ COMMANDS: dict[str, CommandHelp] = {
     "get": CommandHelp("get PARAM [ID|all]", "read a parameter"),
     "params": CommandHelp("params", "list the parameters with their ranges and defaults"),
     "identify": CommandHelp("identify ID|all", "make an idle particle wiggle three times"),
-    "setid": CommandHelp("setid ID NEW_ID", "give the particle with id ID the id NEW_ID (1..253)"),
+    "setid": CommandHelp(
+        "setid ID NEW_ID [force]",
+        "give the particle with id ID the id NEW_ID (1..253); an id in use (the fleet's, or "
+        "answering) is refused unless forced",
+    ),
+    "forget": CommandHelp(
+        "forget ID", "drop a particle that is gone for good: STOP no longer waits for it"
+    ),
     "ping": CommandHelp("ping [ID|all]", "ask for a STATUS now"),
     "help": CommandHelp("help [COMMAND]", "show the commands"),
     "quit": CommandHelp("quit", "leave the console (the log is kept)"),
@@ -125,7 +127,7 @@ def _check_range(value: int, param: Param, what: str, zero_ok: bool) -> None:
         raise CommandError(f"{what} must be {spec.min}..{spec.max}{extra}, not {value}")
 
 
-def _start(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _start(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     method = Method.COUNTING
     options = {"cycle": 0, "wave": 0, "update": 0, "phototaxis": 0}
     aliases = {"photo": "phototaxis", "cycle_steps": "cycle", "wave_size": "wave"}
@@ -147,7 +149,7 @@ def _start(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
         raise CommandError("phototaxis must be 0 or 1")
 
     def send() -> str:
-        campaign = model.start(
+        campaign = swarm.send_start(
             method,
             cycle_steps=options["cycle"],
             wave_size=options["wave"],
@@ -155,26 +157,33 @@ def _start(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
             phototaxis=bool(options["phototaxis"]),
         )
         return (
-            f"START run {model.run_id} method {method.name} sent to {len(campaign.pending)} "
-            "known particle(s); asking each (PING) until it confirms, resending to any that "
-            "missed it"
+            f"START run {swarm.tracker.run_id} method {method.name} sent to "
+            f"{len(campaign.pending)} known particle(s); asking each (PING) until it confirms, "
+            "resending to any that missed it"
         )
 
     return send
 
 
-def _stop(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _stop(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     def send() -> str:
-        campaign = model.stop()
-        return (
+        campaign = swarm.send_stop()
+        expected = max(len(campaign.pending), campaign.required())
+        text = (
             f"STOP sent ({len(campaign.burst)} copies in {campaign.burst[-1]:.1f} s); repeating "
-            f"until all {len(campaign.pending)} known particle(s) report it"
+            f"until all {expected} expected particle(s) report it"
         )
+        if campaign.hold_until > campaign.started:
+            text += (
+                f", and for {campaign.hold_until - campaign.started:.0f} s whatever is heard "
+                "(the console has just started: particles it has not heard yet may be moving)"
+            )
+        return text
 
     return send
 
 
-def _set(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _set(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     if len(args) not in (2, 3):
         raise CommandError(f"usage: {COMMANDS['set'].usage}")
     param = parse_param(args[0])
@@ -183,38 +192,41 @@ def _set(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
     target = parse_target(args[2] if len(args) == 3 else None)
 
     def send() -> str:
-        model.set_param(param, value, target)
+        swarm.send_set(param, value, _one(target))
         return f"SET_PARAM {param.name} = {value} sent to {_target_text(target)}"
 
     return send
 
 
-def _get(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _get(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     if len(args) not in (1, 2):
         raise CommandError(f"usage: {COMMANDS['get'].usage}")
     param = parse_param(args[0])
     target = parse_target(args[1] if len(args) == 2 else None)
 
     def send() -> str:
-        model.get_param(param, target)
+        swarm.send_get(param, _one(target))
         return f"GET_PARAM {param.name} sent to {_target_text(target)}"
 
     return send
 
 
-def _identify(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _identify(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     if len(args) != 1:
         raise CommandError(f"usage: {COMMANDS['identify'].usage}")
     target = parse_target(args[0])
 
     def send() -> str:
-        model.identify(target)
+        swarm.identify(_one(target))
         return f"IDENTIFY sent to {_target_text(target)}"
 
     return send
 
 
-def _setid(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _setid(swarm: Swarm, args: list[str]) -> Callable[[], str]:
+    force = bool(args) and args[-1].lower() == "force"
+    if force:
+        args = args[:-1]
     if len(args) != 2:
         raise CommandError(f"usage: {COMMANDS['setid'].usage}")
     target = parse_target(args[0], allow_all=False)
@@ -223,40 +235,65 @@ def _setid(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
         raise CommandError("SET_ID must name one particle, never broadcast")
     if not 1 <= new_id <= 253:
         raise CommandError(f"NEW_ID must be 1..253, not {new_id}")
+    if not force and new_id != target and new_id in swarm.tracker.ids_in_use():
+        raise CommandError(
+            f"Id {new_id} is in use (the fleet's, or a particle answers with it): choose a free "
+            f"one, or 'setid {target} {new_id} force' if particle {new_id} is gone"
+        )
 
     def send() -> str:
-        model.set_id(target, new_id)
+        try:
+            swarm.send_set_id(target, new_id, force=force)
+        except SwarmError as exc:
+            raise CommandError(str(exc)) from None
         return f"SET_ID {target} -> {new_id} sent"
 
     return send
 
 
-def _ping(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _forget(swarm: Swarm, args: list[str]) -> Callable[[], str]:
+    if len(args) != 1:
+        raise CommandError(f"usage: {COMMANDS['forget'].usage}")
+    target = parse_target(args[0], allow_all=False)
+
+    def forget() -> str:
+        # The swarm notes what it forgot (shown, and logged).
+        return "" if swarm.forget(target) else f"No particle {target} to forget"
+
+    return forget
+
+
+def _one(target: int) -> int | None:
+    """The Swarm API's way of saying every particle: None."""
+    return None if target == BROADCAST_ID else target
+
+
+def _ping(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     target = parse_target(args[0] if args else None)
 
     def send() -> str:
-        model.ping(target)
+        swarm.ping(_one(target))
         return f"PING sent to {_target_text(target)}"
 
     return send
 
 
-def _show(text: Callable[[], str]) -> Callable[[ConsoleModel, list[str]], Callable[[], str]]:
+def _show(text: Callable[[], str]) -> Callable[[Swarm, list[str]], Callable[[], str]]:
     """A command that only shows text."""
-    return lambda model, args: text
+    return lambda swarm, args: text
 
 
 def _target_text(target: int) -> str:
     return "all particles" if target == BROADCAST_ID else f"particle {target}"
 
 
-def _help(model: ConsoleModel, args: list[str]) -> Callable[[], str]:
+def _help(swarm: Swarm, args: list[str]) -> Callable[[], str]:
     text = help_text(args[0] if args else None)  # an unknown command is an error now
     return lambda: text
 
 
 # Each handler checks its arguments (CommandError) and returns what carries the command out.
-_HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], Callable[[], str]]] = {
+_HANDLERS: dict[str, Callable[[Swarm, list[str]], Callable[[], str]]] = {
     "start": _start,
     "stop": _stop,
     "set": _set,
@@ -264,13 +301,14 @@ _HANDLERS: dict[str, Callable[[ConsoleModel, list[str]], Callable[[], str]]] = {
     "identify": _identify,
     "setid": _setid,
     "ping": _ping,
+    "forget": _forget,
     "params": _show(params_text),
     "help": _help,
 }
 SENDING = frozenset({"start", "stop", "set", "get", "identify", "setid", "ping"})
 
 
-def prepare(model: ConsoleModel, line: str) -> Prepared | None:
+def prepare(swarm: Swarm, line: str) -> Prepared | None:
     """Understands and checks one command line without carrying it out; None for a blank line,
     CommandError if it is not understood. `quit` is the UI's business and is not handled here."""
     try:
@@ -283,10 +321,10 @@ def prepare(model: ConsoleModel, line: str) -> Prepared | None:
     handler = _HANDLERS.get(name)
     if handler is None:
         raise CommandError(f"Unknown command '{name}'. Type 'help' for the list.")
-    return Prepared(name, handler(model, args))
+    return Prepared(name, handler(swarm, args))
 
 
-def execute(model: ConsoleModel, line: str) -> str:
+def execute(swarm: Swarm, line: str) -> str:
     """Runs one command line; returns what to show. CommandError if it is not understood."""
-    prepared = prepare(model, line)
+    prepared = prepare(swarm, line)
     return "" if prepared is None else prepared.run()

@@ -24,6 +24,8 @@ class ReplayRadio(Radio):
     original spacing divided by speed (speed=max: all at once). Everything downstream (decoding,
     bad-frame counts, the console) runs exactly as it did live."""
 
+    faults_on_link = False  # it replays what was heard: nothing to lose or delay
+
     def __init__(self, path: Path, speed: float = 1.0, *, url: str | None = None) -> None:
         super().__init__(url or f"replay://{path}")
         if not speed > 0:  # NaN too

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import importlib
 import threading
@@ -115,6 +116,9 @@ class RadioUrl:
     scheme: str
     target: str
     options: dict[str, str]
+    caller_steps: bool = False
+    """A simulated radio is stepped by whoever opened it (particlebot.Swarm at speed=max), never
+    by a thread of its own: the same run every time for a seed."""
 
     def get_float(self, key: str, default: float, bounds: Bounds = ANY) -> float:
         """Option key as a finite number within bounds (default when absent)."""
@@ -176,9 +180,10 @@ def parse_radio_url(text: str) -> RadioUrl:
     return RadioUrl(text=text, scheme=scheme, target=target, options=options)
 
 
-def open_radio(url: str) -> Radio:
-    """Opens the radio a URL names; raises RadioError with advice if it cannot."""
-    parsed = parse_radio_url(url)
+def open_radio(url: str, *, caller_steps: bool = False) -> Radio:
+    """Opens the radio a URL names; raises RadioError with advice if it cannot. caller_steps: see
+    RadioUrl (real radios ignore it)."""
+    parsed = dataclasses.replace(parse_radio_url(url), caller_steps=caller_steps)
     module_name, _, class_name = BACKENDS[parsed.scheme].partition(":")
     try:
         module = importlib.import_module(module_name)
@@ -188,7 +193,13 @@ def open_radio(url: str) -> Radio:
             "with its dependencies: make venv (or pip install -e .)"
         ) from exc
     backend: type[Radio] = getattr(module, class_name)
-    return backend.from_url(parsed)
+    if not backend.faults_on_link:
+        return backend.from_url(parsed)
+    from particlebot.radio.faults import FaultyRadio, faults_from_url
+
+    faults = faults_from_url(parsed)  # checked before the port is touched
+    radio = backend.from_url(parsed)
+    return FaultyRadio(radio, faults) if faults.any else radio
 
 
 class Radio(ABC):
@@ -197,6 +208,10 @@ class Radio(ABC):
     Backends report link changes (a port that vanished and came back) to link listeners instead
     of raising from receive(), so one session survives an unplugged USB cable.
     """
+
+    faults_on_link: bool = True
+    """Whether open_radio adds the URL's loss= and delay_ms= between the host and this radio
+    (particlebot.radio.faults); simulations model them on their air instead, a replay has none."""
 
     def __init__(self, url: str) -> None:
         self.url = url

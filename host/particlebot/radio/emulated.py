@@ -1,7 +1,8 @@
 """A base-station radio on emulated air with simavr particles running the real firmware image.
 
 emulated://K?loss=0.2&delay_ms=5&speed=1&spacing=0.155&start=0.10&lamp=X,Y,H&seed=1&elf=PATH
-&base_baud=9600&buffer=256: K particles (ids 1..K) in a line from the lamp, each the ELF that
+&base_baud=9600&buffer=256&scenario=line:
+K particles (ids 1..K) in a line from the lamp, each the ELF that
 `make firmware` builds, in tools/sim/particle_sim (`make harness`), on 802.15.4 air as
 particlebot.sim.medium models it. speed=max runs as fast as the machine allows.
 """
@@ -14,20 +15,25 @@ from typing import Self
 from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds
 from particlebot.radio import RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
+from particlebot.radio.faults import (
+    FAULT_OPTIONS,
+    SIMULATION_OPTIONS,
+    faults_from_url,
+    scenario_from_url,
+)
 from particlebot.sim.harness import HarnessError
 from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
 
 OPTIONS = {
-    "loss",
-    "delay_ms",
     "speed",
     "spacing",
     "start",
     "lamp",
-    "seed",
     "elf",
     "base_baud",
     "buffer",
+    *FAULT_OPTIONS,
+    *SIMULATION_OPTIONS,
 }
 MAX_PARTICLES = 32
 """One harness process each; the firmware records at most 32 senders per round anyway."""
@@ -35,17 +41,16 @@ MAX_PARTICLES = 32
 
 def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
     url.check_options(OPTIONS)
-    # A loss of 1 would leave nothing to hear: the console could never confirm a command.
-    loss = url.get_float("loss", 0.0, Bounds(minimum=0, below=1))
-    delay_ms = url.get_float("delay_ms", 0.0, NON_NEGATIVE)
+    scenario_from_url(url)
+    faults = faults_from_url(url)
     elf = Path(url.options["elf"]) if "elf" in url.options else None
     return SwarmConfig(
         count=parse_count(url, default=5, maximum=MAX_PARTICLES),
         lamp=parse_lamp(url),
         start=url.get_float("start", 0.10, NON_NEGATIVE),
         spacing=url.get_float("spacing", 0.155, POSITIVE),
-        loss=loss,
-        delay_us=delay_ms * 1000,
+        loss=faults.loss,
+        delay_us=faults.delay_s * 1_000_000,
         seed=url.get_int("seed", 1, NON_NEGATIVE),
         elf=elf,
         base_baud=url.get_int("base_baud", 9600, POSITIVE),
@@ -79,7 +84,8 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = url.get_speed()
+        speed = url.get_speed()  # checked either way
+        pace = None if url.caller_steps else speed
         try:
             swarm = EmulatedSwarm(config)
         except (FileNotFoundError, HarnessError, OSError) as exc:
@@ -87,7 +93,7 @@ class EmulatedRadio(SwarmRadio[EmulatedSwarm]):
                 f"The emulated particles need the firmware image and the simavr harness ({exc}). "
                 "Run: make firmware harness (after `make system-deps` for the AVR tools)"
             ) from exc
-        return cls(swarm, url=url.text, speed=speed, owns_swarm=True)
+        return cls(swarm, url=url.text, speed=pace, owns_swarm=True)
 
     def close(self) -> None:
         if self._owns_swarm:

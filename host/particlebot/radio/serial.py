@@ -19,6 +19,7 @@ from particlebot.radio import (
     RadioUrl,
 )
 from particlebot.radio._port import open_serial, port_present, quiet_hint
+from particlebot.radio.faults import FAULT_OPTIONS
 
 # API frame types an XBee 802.15.4 radio emits towards its host; used only to warn that a radio
 # is in API mode while being read as transparent.
@@ -58,7 +59,7 @@ class SerialRadio(Radio):
 
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
-        url.check_options({"baud", "retry"})
+        url.check_options({"baud", "retry", *FAULT_OPTIONS})
         if not url.target:
             raise InvalidRadioUrlError(
                 f"{url.text}: no port given; e.g. serial:///dev/ttyUSB0?baud=9600"

@@ -2,20 +2,41 @@
 
 from __future__ import annotations
 
+import random
 from typing import Self
 
 from particlebot.options import NON_NEGATIVE, POSITIVE, SWITCH
 from particlebot.radio import RadioError, RadioUrl
 from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
+from particlebot.radio.faults import (
+    FAULT_OPTIONS,
+    SIMULATION_OPTIONS,
+    Faults,
+    LinkFaults,
+    faults_from_url,
+    scenario_from_url,
+)
 from particlebot.virtual import MAX_PARTICLES
 from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
-OPTIONS = {"lamp", "speed", "spacing", "start", "seed", "kinematics", "noise"}
+OPTIONS = {
+    "lamp",
+    "speed",
+    "spacing",
+    "start",
+    "kinematics",
+    "noise",
+    *FAULT_OPTIONS,
+    *SIMULATION_OPTIONS,
+}
+LOSS_SEED = 0x10557
+"""Mixed into the seed for the losses, so they do not follow the particles' own random numbers."""
 
 
 def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
     """virtual://N?lamp=X,Y,H&spacing=M&start=M&seed=S&kinematics=0|1&noise=SIGMA (metres)."""
     url.check_options(OPTIONS)
+    scenario_from_url(url)
     return SwarmConfig(
         count=parse_count(url, default=10, maximum=MAX_PARTICLES),
         lamp=parse_lamp(url),
@@ -36,7 +57,8 @@ class VirtualRadio(SwarmRadio[VirtualSwarm]):
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
         config = swarm_config_from_url(url)
-        speed = url.get_speed()
+        speed = url.get_speed()  # checked either way
+        pace = None if url.caller_steps else speed
         try:
             swarm = VirtualSwarm(config)
         except (OSError, ImportError) as exc:
@@ -44,4 +66,15 @@ class VirtualRadio(SwarmRadio[VirtualSwarm]):
                 f"The virtual particles need the firmware logic built for this PC ({exc}). "
                 "Run: make native"
             ) from exc
-        return cls(swarm, url=url.text, speed=speed)
+        faults = faults_from_url(url)
+        lose_on_air(swarm, faults.loss, config.seed)
+        link = LinkFaults(Faults(delay_s=faults.delay_s)) if faults.delay_s else None
+        return cls(swarm, url=url.text, speed=pace, link_faults=link)
+
+
+def lose_on_air(swarm: VirtualSwarm, loss: float, seed: int) -> None:
+    """Every copy of every packet, at every receiver on the virtual air, is lost with chance
+    loss (as on the emulated medium), the same copies for the same seed."""
+    if loss:
+        rng = random.Random(seed ^ LOSS_SEED)
+        swarm.air.drop = lambda source, receiver, data: rng.random() < loss

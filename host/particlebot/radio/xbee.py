@@ -30,6 +30,7 @@ from particlebot.radio import (
     WrongModeError,
 )
 from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present, quiet_hint
+from particlebot.radio.faults import FAULT_OPTIONS
 
 _log = logging.getLogger(__name__)
 
@@ -199,7 +200,7 @@ class XBeeRadio(Radio):
 
     @classmethod
     def from_url(cls, url: RadioUrl) -> Self:
-        url.check_options({"baud", "timeout", "probe", "guard", "retry"})
+        url.check_options({"baud", "timeout", "probe", "guard", "retry", *FAULT_OPTIONS})
         if not url.target:
             raise InvalidRadioUrlError(f"{url.text}: no port given; e.g. xbee:///dev/ttyUSB0")
         return cls(

@@ -1,13 +1,10 @@
-"""The console model: the particle table, flags, and START/STOP repeated until confirmed."""
+"""The swarm tracker: the particle table, flags, and START/STOP repeated until confirmed."""
 
 from __future__ import annotations
 
 import pytest
 
-from particlebot.console.commands import CommandError, execute, help_text
-from particlebot.console.model import Campaign, ConsoleModel
 from particlebot.protocol import (
-    BROADCAST_ID,
     DEFINITION_HASH,
     UNASSIGNED_ID,
     Message,
@@ -26,6 +23,7 @@ from particlebot.protocol import (
 )
 from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
+from particlebot.swarm.tracker import Campaign, IdInUseError, Rename, SwarmTracker
 from tests.host.fakes import ManualClock, status_frame
 
 
@@ -73,17 +71,17 @@ def sink(clock: ManualClock) -> Sink:
 
 
 @pytest.fixture
-def model(sink: Sink, clock: ManualClock) -> ConsoleModel:
-    return ConsoleModel(sink, clock)
+def model(sink: Sink, clock: ManualClock) -> SwarmTracker:
+    return SwarmTracker(sink, clock)
 
 
-def hear(model: ConsoleModel, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
+def hear(model: SwarmTracker, clock: ManualClock, raw: bytes, source: str | None = None) -> None:
     """The frame arrives; then the console's next poll (at the same moment) looks at it."""
     model.on_frame(ReceivedFrame(clock(), source, decode_frame(raw)))
     model.poll()
 
 
-def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualClock) -> None:
+def test_a_status_adds_a_row_with_its_fields(model: SwarmTracker, clock: ManualClock) -> None:
     hear(model, clock, status_frame(4, state=int(State.CYCLING), s_n=3, intensity=812))
     (row,) = model.rows()
     assert (row.id, row.state, row.intensity) == (4, State.CYCLING, 812)
@@ -92,7 +90,7 @@ def test_a_status_adds_a_row_with_its_fields(model: ConsoleModel, clock: ManualC
 
 
 def test_a_particle_silent_for_three_status_periods_is_flagged(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(1))
     clock.advance(2.0)
@@ -102,7 +100,7 @@ def test_a_particle_silent_for_three_status_periods_is_flagged(
 
 
 def test_a_different_definition_hash_is_flagged_and_noted_once(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     other = DEFINITION_HASH ^ 0x1
     hear(model, clock, status_frame(2, definition_hash=other))
@@ -112,7 +110,7 @@ def test_a_different_definition_hash_is_flagged_and_noted_once(
 
 
 def test_unassigned_particles_are_told_apart_by_radio_address(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(254), source="0013A20000000001")
     hear(model, clock, status_frame(254), source="0013A20000000002")
@@ -121,25 +119,25 @@ def test_unassigned_particles_are_told_apart_by_radio_address(
 
 
 def test_frames_from_a_base_station_are_not_particles(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, encode_frame(Stop(), 0, 1))
     assert model.rows() == []
 
 
-def run(model: ConsoleModel, clock: ManualClock, seconds: float, every: float = 0.05) -> None:
+def run(model: SwarmTracker, clock: ManualClock, seconds: float, every: float = 0.05) -> None:
     """Polls the model every `every` seconds for `seconds`, as the console's timer does."""
     for _ in range(round(seconds / every)):
         clock.advance(every)
         model.poll()
 
 
-def hear_all(model: ConsoleModel, clock: ManualClock, ids: range, state: State) -> None:
+def hear_all(model: SwarmTracker, clock: ManualClock, ids: range, state: State) -> None:
     for particle in ids:
         hear(model, clock, status_frame(particle, state=int(state)))
 
 
-def stop_running(model: ConsoleModel, clock: ManualClock, ids: range) -> Campaign:
+def stop_running(model: SwarmTracker, clock: ManualClock, ids: range) -> Campaign:
     """Particles ids report CYCLING; then STOP, and polls until its burst has gone out."""
     hear_all(model, clock, ids, State.CYCLING)
     campaign = model.stop()
@@ -148,7 +146,7 @@ def stop_running(model: ConsoleModel, clock: ManualClock, ids: range) -> Campaig
 
 
 def test_stop_goes_out_four_times_in_three_tenths_of_a_second_then_pings_each_particle(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 4), State.CYCLING)
     origin = clock()
@@ -162,7 +160,7 @@ def test_stop_goes_out_four_times_in_three_tenths_of_a_second_then_pings_each_pa
 
 
 def test_after_a_late_poll_the_rest_of_the_burst_goes_out_one_copy_a_poll(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 2), State.CYCLING)
     origin = clock()
@@ -175,7 +173,7 @@ def test_after_a_late_poll_the_rest_of_the_burst_goes_out_one_copy_a_poll(
 
 
 def test_stop_is_repeated_every_half_second_until_every_particle_reports_it_has_stopped(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     origin = clock()
     campaign = stop_running(model, clock, range(1, 4))
@@ -196,7 +194,7 @@ def test_stop_is_repeated_every_half_second_until_every_particle_reports_it_has_
 
 
 def test_a_status_from_before_the_stop_does_not_confirm_it(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(1, state=int(State.IDLE)))
     clock.advance(0.5)
@@ -206,7 +204,7 @@ def test_a_status_from_before_the_stop_does_not_confirm_it(
 
 
 def test_stop_is_not_repeated_once_every_particle_obeys_it_only_pinged(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_running(model, clock, range(1, 3))
     hear_all(model, clock, range(1, 3), State.STOPPING)
@@ -218,7 +216,7 @@ def test_stop_is_not_repeated_once_every_particle_obeys_it_only_pinged(
     assert campaign.success
 
 
-def stop_answered_at_once(model: ConsoleModel, clock: ManualClock) -> Campaign:
+def stop_answered_at_once(model: SwarmTracker, clock: ManualClock) -> Campaign:
     """Particle 1 reports CYCLING; STOP; 0.05 s later (before the burst is out) it is IDLE."""
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
@@ -228,7 +226,7 @@ def stop_answered_at_once(model: ConsoleModel, clock: ManualClock) -> Campaign:
 
 
 def test_the_whole_burst_goes_out_even_when_every_known_particle_has_stopped(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_answered_at_once(model, clock)
     # Particles the console has not heard yet may be out there; only the burst can reach them.
@@ -239,7 +237,7 @@ def test_the_whole_burst_goes_out_even_when_every_known_particle_has_stopped(
 
 
 def test_a_particle_whose_latest_status_is_no_longer_stopped_is_waited_for_again(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = stop_answered_at_once(model, clock)
     assert campaign.confirmed == {"1"}
@@ -254,7 +252,7 @@ def test_a_particle_whose_latest_status_is_no_longer_stopped_is_waited_for_again
 
 
 def test_stop_names_the_particles_that_never_confirmed(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(5, 8), State.CYCLING)
     origin = clock()
@@ -270,7 +268,7 @@ def test_stop_names_the_particles_that_never_confirmed(
 
 
 def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = model.stop()
     run(model, clock, 0.4)
@@ -279,7 +277,7 @@ def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
 
 
 def test_pings_go_to_four_particles_a_round_those_asked_least_first(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     stop_running(model, clock, range(1, 7))
     assert sink.since(4) == ["Ping 1", "Ping 2", "Ping 3", "Ping 4"]
@@ -289,7 +287,7 @@ def test_pings_go_to_four_particles_a_round_those_asked_least_first(
 
 
 def test_one_ping_asks_every_particle_without_an_id(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear(model, clock, status_frame(3, state=int(State.CYCLING)))
     for source in ("0013A20000000001", "0013A20000000002"):
@@ -302,11 +300,11 @@ def test_one_ping_asks_every_particle_without_an_id(
 def test_a_stop_burst_must_start_at_once_and_be_in_order(clock: ManualClock) -> None:
     for burst in [(), (0.1, 0.2), (0.0, 0.2, 0.1)]:
         with pytest.raises(ValueError, match="stop_burst"):
-            ConsoleModel(None, clock, stop_burst=burst)
+            SwarmTracker(None, clock, stop_burst=burst)
 
 
 def start_with_one_answer(
-    model: ConsoleModel, clock: ManualClock, runs: dict[int, int]
+    model: SwarmTracker, clock: ManualClock, runs: dict[int, int]
 ) -> Campaign:
     """Particles (id: run) report those runs; START (method B, 75 steps); 0.1 s later the first
     of them reports the new run."""
@@ -320,7 +318,7 @@ def start_with_one_answer(
 
 
 def test_start_takes_a_new_run_id_and_pings_each_particle_until_it_reports_it(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     origin = clock()
     campaign = start_with_one_answer(model, clock, {1: 7, 2: 3})
@@ -338,7 +336,7 @@ def test_start_takes_a_new_run_id_and_pings_each_particle_until_it_reports_it(
 
 
 def test_start_is_resent_with_the_same_run_id_when_a_particle_reports_another_run(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = start_with_one_answer(model, clock, {1: 7, 2: 7})
     hear(model, clock, status_frame(2, run_id=7))  # its answer shows it missed START
@@ -350,7 +348,7 @@ def test_start_is_resent_with_the_same_run_id_when_a_particle_reports_another_ru
 
 
 def test_start_names_the_particles_that_never_confirmed(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = start_with_one_answer(model, clock, {1: 2, 4: 2})
     run(model, clock, model.start_timeout + 0.1)
@@ -360,7 +358,7 @@ def test_start_names_the_particles_that_never_confirmed(
 
 
 def test_stop_cancels_a_start_still_being_resent(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear(model, clock, status_frame(1))
     start = model.start(Method.COUNTING)
@@ -372,7 +370,7 @@ def test_stop_cancels_a_start_still_being_resent(
     assert "Start" not in sink.types()[1:]
 
 
-def test_param_values_are_shown_as_notes(model: ConsoleModel, clock: ManualClock) -> None:
+def test_param_values_are_shown_as_notes(model: SwarmTracker, clock: ManualClock) -> None:
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(ParamResult.BUSY), value=150)
     hear(model, clock, encode_frame(reply, 3, 0))
     assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (BUSY)"
@@ -384,70 +382,18 @@ def test_param_values_are_shown_as_notes(model: ConsoleModel, clock: ManualClock
     assert model.notes[-1].text == "Particle 3: SERVO_CAL_3 = 1285 (SERVO_TABLE_NOT_MONOTONIC)"
 
 
-def test_commands_become_the_right_messages(model: ConsoleModel, sink: Sink) -> None:
-    execute(model, "start B cycle=300 wave=4 update=60 phototaxis=1")
-    execute(model, "set cycle_steps 75 3")
-    execute(model, "set 8 20")
-    execute(model, "setid 254 12")
-    execute(model, "identify all")
-    execute(model, "ping 4")
-    start, set_one, set_all, set_id, identify, ping = sink.messages
-    assert start == Start(
-        run_id=1, method=1, cycle_steps=300, wave_size=4, update_interval_s=60, phototaxis=1
-    )
-    assert set_one == SetParam(target=3, param=int(Param.CYCLE_STEPS), value=75)
-    assert set_all == SetParam(target=BROADCAST_ID, param=int(Param.COUNT_TOLERANCE), value=20)
-    assert set_id == SetId(target=254, new_id=12)
-    assert identify.target == BROADCAST_ID  # type: ignore[attr-defined]
-    assert ping == Ping(target=4)
-
-
-def test_the_stop_and_start_commands_say_how_they_are_repeated(
-    model: ConsoleModel, clock: ManualClock
-) -> None:
-    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
-    assert "4 copies in 0.3 s" in execute(model, "stop")
-    assert "1 known particle(s)" in execute(model, "start D")
-
-
-@pytest.mark.parametrize(
-    ("line", "complaint"),
-    [
-        ("start E", "use A, B, C or D"),
-        ("start cycle=5", "cycle must be 10..3000"),
-        ("start speed=3", "takes cycle="),
-        ("set nonsense 3", "params"),
-        ("set cycle_steps 99999", "10..3000"),
-        ("setid all 4", "one particle"),
-        ("setid 3 254", "1..253"),
-        ("identify", "usage"),
-        ("fly", "help"),
-    ],
-)
-def test_bad_commands_say_how_to_write_them(model: ConsoleModel, line: str, complaint: str) -> None:
-    with pytest.raises(CommandError, match=complaint):
-        execute(model, line)
-    assert model.run_id == 0
-
-
-def test_help_lists_every_command() -> None:
-    text = help_text()
-    for command in ("start", "stop", "set", "get", "identify", "setid", "ping", "quit"):
-        assert f"\n{command}" in f"\n{text}"
-
-
 # ---- answers to SET_PARAM and GET_PARAM --------------------------------------------------------
 
 
 def answer(
-    model: ConsoleModel, clock: ManualClock, particle: int, result: ParamResult, value: int
+    model: SwarmTracker, clock: ManualClock, particle: int, result: ParamResult, value: int
 ) -> None:
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(result), value=value)
     hear(model, clock, encode_frame(reply, particle, 0))
 
 
 def test_answers_to_a_broadcast_set_are_summarised_in_one_line(
-    model: ConsoleModel, clock: ManualClock, sink: Sink
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     notes_before = len(model.notes)
@@ -460,8 +406,13 @@ def test_answers_to_a_broadcast_set_are_summarised_in_one_line(
     assert sink.notes[-1] == summary  # and it goes into the log
 
 
+def asked_for(model: SwarmTracker) -> float:
+    """How long a query waits at most: the first wait, then a retry by id each time."""
+    return model.param_timeout + (model.param_attempts - 1) * model.param_retry
+
+
 def test_refusals_and_silence_are_named_in_the_summary(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     notes_before = len(model.notes)
@@ -470,7 +421,13 @@ def test_refusals_and_silence_are_named_in_the_summary(
         answer(model, clock, particle, ParamResult.OK, 300)
     for particle in (3, 7):
         answer(model, clock, particle, ParamResult.BUSY, 150)
+    sent = len(sink.messages)
     run(model, clock, model.param_timeout)
+    # Particle 9 may have missed the broadcast, or its answer was lost: it is asked by id.
+    assert sink.messages[sent:] == [SetParam(target=9, param=int(Param.CYCLE_STEPS), value=300)]
+    assert list(model.notes)[notes_before:] == []
+    run(model, clock, asked_for(model) - model.param_timeout)
+    assert len(sink.messages) == sent + model.param_attempts - 1
     (summary,) = [note for note in list(model.notes)[notes_before:]]
     assert summary.text == (
         "SET CYCLE_STEPS = 300: 7/10 OK; BUSY: 3, 7 (STOP them first); no answer from 9"
@@ -478,8 +435,21 @@ def test_refusals_and_silence_are_named_in_the_summary(
     assert summary.level == "warning"
 
 
+def test_a_particle_asked_again_by_id_completes_the_summary(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear_all(model, clock, range(1, 4), State.IDLE)
+    query = model.set_param(Param.CYCLE_STEPS, 300)
+    for particle in (1, 2):
+        answer(model, clock, particle, ParamResult.OK, 300)
+    run(model, clock, model.param_timeout + model.param_retry)
+    answer(model, clock, 3, ParamResult.OK, 300)
+    assert query.done and query.ok
+    assert model.notes[-1].text == "SET CYCLE_STEPS = 300: 3/3 OK"
+
+
 def test_a_broadcast_get_groups_the_particles_by_value(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear_all(model, clock, range(1, 11), State.IDLE)
     model.get_param(Param.CYCLE_STEPS)
@@ -489,21 +459,21 @@ def test_a_broadcast_get_groups_the_particles_by_value(
 
 
 def test_a_get_nobody_answers_says_so_after_its_timeout(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear_all(model, clock, range(1, 3), State.IDLE)
     model.get_param(Param.CYCLE_STEPS)
-    run(model, clock, model.param_timeout - 0.1)
+    run(model, clock, asked_for(model) - 0.1)
     assert not model.notes
     run(model, clock, 0.1)
-    assert model.notes[-1].text == "GET CYCLE_STEPS: no particle answered within 2 s"
+    assert model.notes[-1].text == "GET CYCLE_STEPS: no particle answered within 6.5 s"
     model.get_param(Param.CYCLE_STEPS, 7)
-    run(model, clock, model.param_timeout)
-    assert model.notes[-1].text == "GET CYCLE_STEPS to particle 7: no answer within 2 s"
+    run(model, clock, asked_for(model))
+    assert model.notes[-1].text == "GET CYCLE_STEPS to particle 7: no answer within 6.5 s"
 
 
 def test_the_answer_of_one_particle_asked_by_id_is_one_line(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     model.get_param(Param.CYCLE_STEPS, 3)
     answer(model, clock, 3, ParamResult.OK, 150)
@@ -514,7 +484,7 @@ def test_the_answer_of_one_particle_asked_by_id_is_one_line(
 
 
 def test_a_particle_that_resets_during_a_run_is_flagged_with_the_cause(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, state=int(State.CYCLING), run_id=3, uptime_ms=60_000))
     clock.advance(2.0)
@@ -529,7 +499,7 @@ def test_a_particle_that_resets_during_a_run_is_flagged_with_the_cause(
 
 
 def test_a_reset_outside_a_run_is_noted_but_not_flagged(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, uptime_ms=60_000))
     hear(model, clock, status_frame(4, resets=2, last_reset_cause=0x01))
@@ -540,7 +510,7 @@ def test_a_reset_outside_a_run_is_noted_but_not_flagged(
 
 
 def test_a_reset_with_a_saturated_counter_is_still_seen_by_the_uptime(
-    model: ConsoleModel, clock: ManualClock
+    model: SwarmTracker, clock: ManualClock
 ) -> None:
     hear(model, clock, status_frame(4, state=int(State.PAUSED), resets=255, uptime_ms=9_000))
     hear(model, clock, status_frame(4, resets=255, uptime_ms=400, last_reset_cause=0x08))
@@ -552,7 +522,7 @@ def test_a_reset_with_a_saturated_counter_is_still_seen_by_the_uptime(
 
 
 def test_a_radio_that_hears_nothing_gets_a_hint_once(sink: Sink, clock: ManualClock) -> None:
-    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    model = SwarmTracker(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
     run(model, clock, 4.9)
     assert not model.notes
     run(model, clock, 10.0)
@@ -562,7 +532,7 @@ def test_a_radio_that_hears_nothing_gets_a_hint_once(sink: Sink, clock: ManualCl
 
 
 def test_a_radio_that_hears_something_gets_no_hint(sink: Sink, clock: ManualClock) -> None:
-    model = ConsoleModel(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
+    model = SwarmTracker(sink, clock, quiet_hint="Check the baud, PAN ID and channel.")
     model.on_packet(Packet(b"\x00", None, clock()))
     run(model, clock, 10.0)
     assert not model.notes
@@ -579,7 +549,7 @@ class LostPortSink(Sink):
 
 
 def test_a_radio_that_can_never_send_ends_a_campaign_with_one_message(clock: ManualClock) -> None:
-    model = ConsoleModel(ReadOnlySink(clock), clock)
+    model = SwarmTracker(ReadOnlySink(clock), clock)
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
     run(model, clock, 3.0)
@@ -592,9 +562,144 @@ def test_a_radio_that_can_never_send_ends_a_campaign_with_one_message(clock: Man
 def test_a_lost_port_is_reported_once_per_campaign_not_once_per_resend(
     clock: ManualClock,
 ) -> None:
-    model = ConsoleModel(LostPortSink(clock), clock)
+    model = SwarmTracker(LostPortSink(clock), clock)
     hear(model, clock, status_frame(1, state=int(State.CYCLING)))
     campaign = model.stop()
     run(model, clock, 3.0)
     assert not campaign.done  # the port may come back: it keeps trying
     assert len([note for note in model.notes if "Could not send" in note.text]) == 1
+
+
+# ---- who is in the swarm: grace period, largest group, duplicates, renames ----------------------
+
+
+def test_just_after_the_start_stop_keeps_going_out_and_asks_everyone(
+    sink: Sink, clock: ManualClock
+) -> None:
+    model = SwarmTracker(sink, clock, stop_grace=10.0)
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    origin = clock()
+    campaign = model.stop()
+    run(model, clock, 0.4)
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    run(model, clock, 5.0)
+    # Particle 1 confirmed long ago, but others may be out there: STOP every 0.5 s, and a
+    # PING to every particle each second, until the grace period is over.
+    assert not campaign.done
+    stops = sink.offsets(Stop, origin)
+    assert stops[4:] == [round(0.8 + 0.5 * k, 3) for k in range(len(stops) - 4)]
+    broadcast_pings = [m for m in sink.messages if isinstance(m, Ping) and m.target == 255]
+    assert len(broadcast_pings) >= 4
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    run(model, clock, 5.0)
+    assert campaign.done and campaign.success
+    assert "confirmed by all 1 particles in 10.0 s" in campaign.outcome
+
+
+def test_a_particle_first_heard_during_a_stop_must_confirm_it_too(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(1, state=int(State.CYCLING)))
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear(model, clock, status_frame(1, state=int(State.IDLE)))
+    hear(model, clock, status_frame(2, state=int(State.CYCLING)))  # missed the first copy
+    run(model, clock, 0.5)
+    assert not campaign.done and campaign.pending == {"2"}
+    hear(model, clock, status_frame(2, state=int(State.IDLE)))
+    assert campaign.done and campaign.success and campaign.confirmed == {"1", "2"}
+
+
+def test_a_run_reported_by_a_group_sets_how_many_must_confirm_stop(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    for particle in (1, 2):
+        hear(model, clock, status_frame(particle, state=int(State.CYCLING), group_size=3))
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear_all(model, clock, range(1, 3), State.IDLE)
+    run(model, clock, model.stop_timeout)
+    assert campaign.done and not campaign.success
+    assert "2 particle(s) confirmed, but 3 were seen together; 1 never answered" in (
+        campaign.outcome
+    )
+
+
+def test_two_clocks_under_one_id_on_a_transparent_link_are_a_duplicate(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    hear(model, clock, status_frame(5, uptime_ms=100_000, resets=3))
+    clock.advance(1.0)
+    assert not model.rows()[0].duplicate
+    # Another particle 5, switched on 30 s ago: its uptime is not this one's.
+    hear(model, clock, status_frame(5, uptime_ms=30_000, resets=3))
+    (row,) = model.rows()
+    assert row.duplicate == (
+        "two particles answer as 5: its uptime jumped from 100 s to 30 s in 1 s"
+    )
+    assert model.notes[-1].level == "error" and "DUPLICATE id 5" in model.notes[-1].text
+    assert row.reset_in_run is None  # not taken for a reset
+    campaign = model.stop()
+    clock.advance(0.1)
+    hear(model, clock, status_frame(5, state=int(State.IDLE), uptime_ms=101_000, resets=3))
+    run(model, clock, model.stop_timeout)
+    # Which of the two answered cannot be told: STOP is never confirmed for them.
+    assert campaign.done and not campaign.success
+    assert model.unconfirmed(campaign) == [
+        (5, f"duplicate id: {row.duplicate}; their answers cannot be told apart")
+    ]
+
+
+def test_a_reset_is_not_taken_for_a_duplicate(model: SwarmTracker, clock: ManualClock) -> None:
+    hear(model, clock, status_frame(5, uptime_ms=100_000, resets=3))
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, uptime_ms=1_200, resets=4, last_reset_cause=0x08))
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, uptime_ms=3_200, resets=4))
+    assert not model.rows()[0].duplicate
+    assert "Particle 5 reset (watchdog" in model.notes[-1].text
+
+
+def test_a_particle_renamed_from_here_on_a_transparent_link_leaves_no_row(
+    model: SwarmTracker, clock: ManualClock, sink: Sink
+) -> None:
+    hear(model, clock, status_frame(3, uptime_ms=50_000))
+    hear(model, clock, status_frame(4, uptime_ms=60_000))
+    with pytest.raises(IdInUseError, match="id 4 is in use"):
+        model.set_id(3, 4)
+    model.set_id(3, 9)
+    assert sink.messages[-1] == SetId(target=3, new_id=9)
+    clock.advance(0.05)
+    hear(model, clock, status_frame(9, uptime_ms=50_050))  # its answer, under the new id
+    assert [row.id for row in model.rows()] == [4, 9]
+    assert model.take_renames() == [Rename(3, 9, None)]
+
+
+def test_two_particles_switched_on_together_are_told_by_their_frame_numbers(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    # Same uptime, same reset count: but each numbers its own frames.
+    for step, seq in enumerate((40, 38)):
+        clock.advance(1.0)
+        hear(model, clock, status_frame(5, seq=seq, uptime_ms=60_000 + 1000 * step))
+    assert model.rows()[0].duplicate == (
+        "two particles answer as 5: its frame numbers went back from 40 to 38 with no reset"
+    )
+
+
+def test_a_shadow_lost_frames_and_a_reset_are_no_duplicate(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    # Light that jumps and comes back (a hand over the swarm), frame numbers with gaps (lost
+    # frames) and round the 8-bit wrap, then a reset that starts them again from 0.
+    for step, (seq, intensity) in enumerate(((250, 900), (255, 400), (3, 900), (40, 890))):
+        clock.advance(2.0)
+        hear(
+            model,
+            clock,
+            status_frame(5, seq=seq, uptime_ms=60_000 + 2000 * step, intensity=intensity),
+        )
+    clock.advance(2.0)
+    hear(model, clock, status_frame(5, seq=0, uptime_ms=900, resets=2))
+    assert model.rows()[0].duplicate is None
+    assert "Particle 5 reset" in model.notes[-1].text

@@ -146,9 +146,9 @@ def round_trip(url: str) -> float:
 def test_delay_holds_packets_both_ways_on_the_virtual_base_link() -> None:
     plain = round_trip("virtual://2?speed=max&seed=5")
     delayed = round_trip("virtual://2?speed=max&seed=5&delay_ms=200")
-    # 0.2 s out and 0.2 s back. The answer may also queue behind a different STATUS on the
-    # base radio's 9600-baud link (54 ms each) than it did without the delay.
-    assert 0.4 <= delayed - plain <= 0.4 + 2 * 0.054
+    # 0.2 s out and 0.2 s back. Either answer may also queue behind a STATUS or two on the base
+    # radio's 9600-baud link (54 ms each) that the other did not meet.
+    assert abs((delayed - plain) - 0.4) <= 2 * 0.054
 
 
 def test_lost_copies_on_the_virtual_air_follow_the_seed() -> None:

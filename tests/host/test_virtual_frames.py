@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-from particlebot.console.model import Campaign, ConsoleModel
-from particlebot.protocol import FRAME_OVERHEAD, SYNC, Method
+from particlebot.protocol import FRAME_OVERHEAD, SYNC
 from particlebot.radio import open_radio
 from particlebot.radio.virtual import VirtualRadio
-from particlebot.session import Session
-from tests.host.fakes import wait_until
+from particlebot.swarm.api import Swarm
 
 
 def frame_lengths(packet: bytes) -> list[int] | None:
@@ -21,16 +19,6 @@ def frame_lengths(packet: bytes) -> list[int] | None:
         lengths.append(length)
         at += length
     return lengths if at == len(packet) else None
-
-
-def finished(model: ConsoleModel, campaign: Campaign) -> bool:
-    """Waits (on the wall clock; the swarm runs as fast as it can) until campaign has ended."""
-
-    def done() -> bool:
-        model.poll()
-        return campaign.done
-
-    return wait_until(done, timeout=30)
 
 
 def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
@@ -47,20 +35,28 @@ def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
         return False  # nothing is lost: this only watches the air
 
     radio.swarm.air.drop = record
-    session = Session(radio)
-    model = ConsoleModel(session, radio.now)
-    session.add_listener(model)
-    with session:
-        assert wait_until(lambda: len(model.rows()) == 10, timeout=20)
+    with Swarm.open(radio, log_dir=None) as swarm:
+        swarm.wait_for(count=10, timeout=20)
         for _ in range(4):
-            start = model.start(Method.COUNTING, cycle_steps=75)
-            assert finished(model, start) and start.success, start.outcome
-            stop = model.stop()
-            assert finished(model, stop) and stop.success, stop.outcome
+            swarm.start("D", cycle_steps=75)
+            swarm.sleep(6)
+            report = swarm.stop()
+            assert report.confirmed, report
+        swarm.sleep(3)  # a STATUS from every particle after the last STOP
+        drops = dict(swarm.tracker.drops)
+        particles = swarm.particles()
     particle_packets = [data for source, data in packets if source != base_node]
     assert len(particle_packets) > 200
     not_one_frame = [data.hex() for data in particle_packets if len(frame_lengths(data) or []) != 1]
     assert not_one_frame == []
-    bad = {reason: model.drops.get(reason, 0) for reason in ("bad_crc", "bad_length", "truncated")}
+    bad = {reason: drops.get(reason, 0) for reason in ("bad_crc", "bad_length", "truncated")}
     assert bad == {"bad_crc": 0, "bad_length": 0, "truncated": 0}
-    assert model.drops.get("skipped", 0) == 0
+    assert drops.get("skipped", 0) == 0
+    # And the particles heard the base station's frames whole too (their BAD RX column).
+    particle_bad = {
+        p.id: (p.status.rx_bad_crc, p.status.rx_bad_length, p.status.rx_skipped_bytes)
+        for p in particles
+        if p.status is not None
+    }
+    assert len(particle_bad) == 10
+    assert set(particle_bad.values()) == {(0, 0, 0)}, particle_bad

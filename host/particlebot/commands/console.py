@@ -5,11 +5,19 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from particlebot.commands._arguments import add_radio_options
 from particlebot.commands._common import fail, has_terminal, opened_swarm
-from particlebot.console.app import ConsoleApp
 from particlebot.fleet import DEFAULT_FLEET_FILE, FleetFileError
 from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError, parse_radio_url
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_radio_options(parser)
+    parser.add_argument("--no-log", action="store_true", help="do not write a session log")
+    parser.add_argument(
+        "--fleet", help="fleet file: the roster every STOP must hear from (default ./fleet.toml)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,6 +35,9 @@ def run(args: argparse.Namespace) -> int:
         return fail(
             "the console needs a terminal; to record without one: particlebot log --radio URL"
         )
+    # Textual is imported only by the commands that show it.
+    from particlebot.console.app import ConsoleApp
+
     try:
         with opened_swarm(
             args.radio, _log_dir(args), fsync=args.fsync, fleet=fleet_file(args), stepped=False

@@ -7,15 +7,17 @@ import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from particlebot.commands._arguments import add_log_options
 from particlebot.commands._common import fail, has_terminal, opened_swarm
 from particlebot.commands.plot import write_plot
-from particlebot.console.app import ConsoleApp
 from particlebot.logs.jsonl import LogError
+from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
 from particlebot.protocol import PARAM_SPECS, Param, State
 from particlebot.radio import RadioError
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.swarm.api import Swarm
 from particlebot.swarm.results import NotConfirmed, ParticlesMissing, StopReport, SwarmError
+from particlebot.virtual import MAX_PARTICLES
 from particlebot.virtual.swarm import ParticleSnapshot, SwarmConfig, VirtualSwarm
 
 
@@ -160,6 +162,29 @@ def unresolved_neighbours(results: list[DemoResult]) -> list[str]:
     return lines
 
 
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--particles",
+        type=int_arg(Bounds(minimum=1, maximum=MAX_PARTICLES)),
+        default=10,
+        help=f"how many, 1..{MAX_PARTICLES} (default 10)",
+    )
+    parser.add_argument(
+        "--speed",
+        type=float_arg(SPEED),
+        help="times real time, or max (default 2 live, 20 headless)",
+    )
+    parser.add_argument(
+        "--run-s", type=float_arg(POSITIVE), default=12.0, help="simulated seconds of cycling"
+    )
+    parser.add_argument(
+        "--seed", type=int_arg(NON_NEGATIVE), default=1, help="random seed of the particles"
+    )
+    parser.add_argument("--no-ui", action="store_true", help="print a summary, no live console")
+    parser.add_argument("--no-log", action="store_true", help="do not write a session log")
+    add_log_options(parser)
+
+
 def run(args: argparse.Namespace) -> int:
     ui = not args.no_ui and has_terminal()
     speed = args.speed if args.speed is not None else (2.0 if ui else 20.0)
@@ -179,6 +204,8 @@ def run(args: argparse.Namespace) -> int:
             log_path = swarm.log_path
             script = DemoScript(swarm, world, locomote_s=args.run_s)
             if ui:
+                from particlebot.console.app import ConsoleApp  # Textual only when shown
+
                 try:
                     code = ConsoleApp(swarm, script=script).run()
                 except KeyboardInterrupt:

@@ -7,9 +7,22 @@ import os
 import sys
 from pathlib import Path
 
+from particlebot.commands._arguments import message_type
 from particlebot.commands._common import fail
 from particlebot.logs.export import export_csv, export_csv_file
 from particlebot.logs.jsonl import LogError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("log", help="a .jsonl session log")
+    parser.add_argument("-o", "--output", help="CSV file (default: next to the log; - stdout)")
+    parser.add_argument(
+        "--type",
+        action="append",
+        type=message_type,
+        help="only this message type (STATUS, ...); repeatable",
+    )
+    parser.add_argument("--notes", action="store_true", help="add the console's notes, a row each")
 
 
 def run(args: argparse.Namespace) -> int:

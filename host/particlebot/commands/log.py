@@ -5,9 +5,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from particlebot.commands._arguments import add_radio_options
 from particlebot.commands._common import fail, opened_swarm, run_headless, sigterm_as_interrupt
 from particlebot.logs.jsonl import LogError
+from particlebot.options import POSITIVE, float_arg
 from particlebot.radio import RadioError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_radio_options(parser)
+    parser.add_argument("--duration", type=float_arg(POSITIVE), help="stop after this many seconds")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -7,7 +7,31 @@ import sys
 from pathlib import Path
 
 from particlebot.commands._common import fail
-from particlebot.plots import PlotInputError, plot_log
+from particlebot.options import NON_NEGATIVE, Bounds, float_arg, int_arg
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("log", help="a .jsonl session log")
+    parser.add_argument("-o", "--output", help="PNG file (default: next to the log)")
+    parser.add_argument(
+        "--run",
+        type=int_arg(Bounds(minimum=1, maximum=255)),
+        help="only this run: from its START to the next one",
+    )
+    parser.add_argument(
+        "--from",
+        dest="start",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="from S seconds after the session started (as on the time axis)",
+    )
+    parser.add_argument(
+        "--to",
+        dest="end",
+        type=float_arg(NON_NEGATIVE),
+        metavar="S",
+        help="up to S seconds after the session started",
+    )
 
 
 def write_plot(
@@ -20,6 +44,8 @@ def write_plot(
 ) -> int:
     """Plots log (all of it, one run, or a window) to output (default: next to the log, .png);
     warnings go to stderr."""
+    from particlebot.plots import PlotInputError, plot_log  # matplotlib only when drawing
+
     target = output if output is not None else log.with_suffix(".png")
     try:
         result = plot_log(log, target, run=run, start=start, end=end)

@@ -24,12 +24,8 @@ blob breathing in a phase-delayed wave and drifting toward the lamp; with SOURCE
 with per-particle output, or its run folder) the run, interpolated between its rows at --fps."""
 
 
-def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    render = commands.add_parser(
-        "render",
-        help="a synthetic top-view video with known centroids (tracker ground truth)",
-        description=DESCRIPTION,
-    )
+def add_arguments(render: argparse.ArgumentParser) -> None:
+    render.description = DESCRIPTION
     render.add_argument("source", nargs="?", help="simulator CSV or run folder (default: a blob)")
     render.add_argument("-o", "--output", required=True, help="video to write (.mp4 or .avi)")
     render.add_argument("--size", default="1280x720", help="frame size in pixels (1280x720)")

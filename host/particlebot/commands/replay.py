@@ -7,14 +7,24 @@ import math
 from pathlib import Path
 
 from particlebot.commands._common import fail, has_terminal, opened_swarm, run_headless
-from particlebot.console.app import ConsoleApp
 from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
+from particlebot.options import SPEED, float_arg
 from particlebot.radio import RadioError
 from particlebot.swarm.campaigns import state_name
 
 PROGRESS_EVERY_S = 2.0
 """How often a replay without the console says how far it got."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("log", help="a .jsonl session log")
+    parser.add_argument(
+        "--speed",
+        type=float_arg(SPEED),
+        help="times real time, or max (default 1 in the console, max with --no-ui)",
+    )
+    parser.add_argument("--no-ui", action="store_true", help="print a summary instead")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
                     announced = True
                     swarm.note(f"Replay of {args.log} finished; q quits")
                 return None
+
+            from particlebot.console.app import ConsoleApp  # Textual only when shown
 
             app = ConsoleApp(
                 swarm,

@@ -26,12 +26,8 @@ your own runs: T + t_p = T (N + 1) / 2 for a wave of N. SOURCE: a TRACK.csv (par
 simulator CSV in the published format ('Seed, N' first line) or a run folder holding one."""
 
 
-def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    stats = commands.add_parser(
-        "stats",
-        help="Table S2 for tracks and simulator runs: speeds toward the lamp, t-test, plots",
-        description=DESCRIPTION,
-    )
+def add_arguments(stats: argparse.ArgumentParser) -> None:
+    stats.description = DESCRIPTION
     stats.add_argument("sources", nargs="+", metavar="SOURCE", help="TRACK.csv, CSV or folder")
     stats.add_argument(
         "--interval-s", type=float, default=30.0, help="sampling interval (30, as in S6)"

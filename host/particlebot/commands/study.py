@@ -36,12 +36,19 @@ class _OneLineParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineParser(
-        prog="particlebot study",
-        description="Run one of the paper's simulation studies (SI S9) on a Dask cluster; every "
-        "finished run is kept, so rerunning the same command resumes it.",
-        epilog="studies: "
-        + "; ".join(f"{s.name}: {s.title.lower()} ({s.source})" for s in STUDIES.values()),
+    """The study command's parser on its own (main() and its tests)."""
+    parser = _OneLineParser(prog="particlebot study")
+    add_arguments(parser)
+    return parser
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = (
+        "Run one of the paper's simulation studies (SI S9) on a Dask cluster; every finished run "
+        "is kept, so rerunning the same command resumes it."
+    )
+    parser.epilog = "studies: " + "; ".join(
+        f"{s.name}: {s.title.lower()} ({s.source})" for s in STUDIES.values()
     )
     parser.add_argument("name", metavar="NAME", choices=sorted(STUDIES), help=", ".join(STUDIES))
     what = parser.add_argument_group("what to run (default: the paper's parameters)")
@@ -85,7 +92,6 @@ def build_parser() -> argparse.ArgumentParser:
     modes.add_argument("--list", action="store_true", help="show the runs and how many are done")
     modes.add_argument("--report-only", action="store_true", help="report what has finished")
     parser.add_argument("--verbose", action="store_true", help="show Dask's own log messages")
-    return parser
 
 
 def options_from(study: Study, args: argparse.Namespace) -> StudyOptions:
@@ -118,8 +124,14 @@ def options_from(study: Study, args: argparse.Namespace) -> StudyOptions:
 
 
 def main(argv: Sequence[str], runner: Runner | None = None, stream: TextIO | None = None) -> int:
-    """The command; tests pass a stand-in runner and a stream for the progress line."""
-    args = build_parser().parse_args(argv)
+    """The command from its own arguments; tests pass a stand-in runner and a stream for the
+    progress line."""
+    return run(build_parser().parse_args(argv), runner, stream)
+
+
+def run(
+    args: argparse.Namespace, runner: Runner | None = None, stream: TextIO | None = None
+) -> int:
     study = STUDIES[args.name]
     logging.getLogger("distributed").setLevel(logging.INFO if args.verbose else logging.ERROR)
     try:

@@ -32,12 +32,8 @@ four or more --point U,V=X,Y (pixel = floor cm, e.g. tape marks at the field's c
 --checkerboard PICTURE of a board lying on the floor, taken by the same camera."""
 
 
-def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    track = commands.add_parser(
-        "track",
-        help="track the swarm on video: centroid per frame as TRACK.csv, contact sheet",
-        description=DESCRIPTION,
-    )
+def add_arguments(track: argparse.ArgumentParser) -> None:
+    track.description = DESCRIPTION
     track.add_argument("video", help="the run's video (.mp4, .avi, anything FFmpeg decodes)")
     track.add_argument("-o", "--output", help="TRACK.csv (default: VIDEO.track.csv beside it)")
     where = track.add_argument_group("camera geometry")

@@ -195,3 +195,14 @@ def test_the_command_without_a_fleet_or_with_a_bad_id_says_so_in_one_line(
     assert main([*argv, "--particle", "0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "1..253" in err
+
+
+@pytest.mark.parametrize("guard", ["nan", "inf", "-1", "60"])
+def test_a_guard_time_that_would_wait_for_ever_or_is_a_typo_is_refused_as_it_is_read(
+    guard: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as ended:
+        main(["radio", "setup", "--base", "--port", "/dev/null", "--guard-time", guard])
+    assert ended.value.code == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert f"--guard-time: must be a number 0..10, not '{guard}'" in line

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
 from particlebot.fleet import FleetError, FleetFileError, check_id, load_fleet
+from particlebot.options import NON_NEGATIVE, Bounds, float_arg, int_arg
 from particlebot.protocol import DEFINITION_HASH
 
 if TYPE_CHECKING:
@@ -61,7 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="flash boards one after another as they are plugged in (Ctrl-C ends)",
     )
-    parser.add_argument("--count", type=int, help="with --many: stop after this many boards")
+    parser.add_argument(
+        "--count",
+        type=int_arg(Bounds(minimum=1)),
+        help="with --many: stop after this many boards",
+    )
     parser.add_argument(
         "--port",
         help="the board's serial port, running or in its bootloader "
@@ -69,7 +74,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--wait",
-        type=float,
+        type=float_arg(NON_NEGATIVE),
         default=30.0,
         help="seconds to wait for a board to appear (default 30)",
     )
@@ -133,10 +138,8 @@ def _plan(args: argparse.Namespace) -> FlashPlan:
         raise UsageError("--port names one board; --many finds each board on USB")
     if args.many and args.id is not None:
         raise UsageError("--id gives one board its id; --many numbers boards from the fleet")
-    if args.count is not None and (not args.many or args.count < 1):
-        raise UsageError("--count goes with --many and is at least 1")
-    if args.wait < 0:
-        raise UsageError("--wait cannot be negative")
+    if args.count is not None and not args.many:
+        raise UsageError("--count goes with --many")
     fleet = load_fleet(args.fleet)
     if args.id is not None:
         check_id(args.id)

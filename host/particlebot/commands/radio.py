@@ -16,6 +16,11 @@ from particlebot.fleet import (
     timestamp,
     updating_fleet,
 )
+from particlebot.options import Bounds, float_arg
+
+GUARD_TIME = Bounds(minimum=0, maximum=10)
+"""Seconds of silence around +++: a Series 1 radio's GT is at most 0xCE4 ms (3.3 s), so more is a
+typo; NaN or infinity would wait for ever."""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -37,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     setup.add_argument("--fleet", type=Path, default=Path("fleet.toml"), help="fleet file")
     setup.add_argument(
         "--guard-time",
-        type=float,
+        type=float_arg(GUARD_TIME),
         default=1.1,
         help="seconds of silence around +++ (the radio's GT, 1 s from the factory, plus margin)",
     )
@@ -52,8 +57,6 @@ def run(args: argparse.Namespace) -> int:
         fleet = load_fleet(args.fleet)
         if args.particle is not None:
             check_id(args.particle)
-        if args.guard_time < 0:
-            raise FleetError("--guard-time cannot be negative")
     except (FleetFileError, FleetError) as exc:
         return fail(str(exc))
     role = Role.BASE if args.base else Role.PARTICLE

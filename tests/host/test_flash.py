@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import io
 import shutil
 import stat
+import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import SimpleNamespace
@@ -13,7 +15,7 @@ from typing import Any
 import pytest
 import serial
 
-from particlebot.cli import build_parser
+from particlebot.cli import build_parser, main
 from particlebot.commands import flash as flash_command
 from particlebot.fleet import Fleet, ParticleRecord, create_fleet, load_fleet
 from particlebot.provision import identity
@@ -226,6 +228,58 @@ def test_many_boards_without_usb_locations_are_told_apart_by_their_ports(
     assert [o.particle_id for o in outcomes] == [1, 2]
 
 
+class PersonAtTheBench(io.StringIO):
+    """stdout, as the person at the bench reads it: a board whose line is printed is unplugged."""
+
+    def __init__(self, bench: UsbBench) -> None:
+        super().__init__()
+        self.bench = bench
+
+    def write(self, text: str) -> int:
+        self.bench.report(text)
+        return super().write(text)
+
+
+@needs_avrdude
+def test_the_command_prints_a_line_per_board_and_a_summary_and_names_the_failed_one(
+    bench_factory: BenchFactory,
+    image: FirmwareImage,
+    fleet_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    bench = bench_factory(
+        [BenchBoard("a"), BenchBoard("no-bootloader", answers_touch=False), BenchBoard("b")]
+    )
+    out = PersonAtTheBench(bench)
+    monkeypatch.setattr(sys, "stdout", out)
+    argv = ["flash", "--many", "--count", "3", "--fleet", str(fleet_path)]
+    args = build_parser().parse_args([*argv, "--firmware", str(image.path), "--no-check"])
+    clock = bench.clock
+    timing = Timing(bootloader_timeout_s=5.0, poll_s=0.05, clock=clock, sleep=clock.sleep)
+    assert flash_command.run(args, usb=bench, timing=timing) == 1  # one board failed
+
+    lines = out.getvalue().splitlines()
+    where = bench.directory
+    no_bootloader = (
+        "no bootloader appeared within 5 s of the 1200-baud reset: press the board's reset "
+        "button (or unplug and replug it) and try again"
+    )
+    assert lines[0].startswith("Flashing one board after another: plug in a Fio v3")
+    assert lines[1] == f"[1] {where}/tty-a-run (running)..."
+    flashed = f"{image.size:,} B flashed and verified, id written"
+    assert lines[2].startswith(f"[1] particle 1 (new id) on {where}/tty-a-boot: {flashed}")
+    assert lines[3] == f"[2] {where}/tty-no-bootloader-run (running)..."
+    assert lines[4] == f"[2] FAILED {where}/tty-no-bootloader-run: {no_bootloader}"
+    assert lines[5] == f"[3] {where}/tty-b-run (running)..."
+    assert lines[6].startswith(f"[3] particle 2 (new id) on {where}/tty-b-boot: {flashed}")
+    assert lines[7] == (
+        f"2 particle(s) flashed (ids 1, 2); 1 failed: {where}/tty-no-bootloader-run "
+        f"({no_bootloader})"
+    )
+    assert len(lines) == 8
+    assert load_fleet(fleet_path).roster_ids() == [1, 2]
+
+
 def test_flash_many_stops_waiting_when_no_board_comes(
     bench_factory: BenchFactory, image: FirmwareImage, fleet_path: Path
 ) -> None:
@@ -436,6 +490,23 @@ def test_options_that_do_not_go_together(
     assert_one_line(*run_cli([*base, "--many", "--port", "/dev/x"], capsys)[::2], "--many")
     assert_one_line(*run_cli([*base, "--many", "--id", "4"], capsys)[::2], "--many")
     assert_one_line(*run_cli([*base, "--count", "2"], capsys)[::2], "--count")
+
+
+@pytest.mark.parametrize(
+    ("argv", "complaint"),
+    [
+        (["--wait", "nan"], "--wait: must be a number >= 0, not 'nan'"),  # would wait for ever
+        (["--wait", "inf"], "--wait: must be a number >= 0, not 'inf'"),
+        (["--many", "--count", "0"], "--count: must be a whole number >= 1, not '0'"),
+    ],
+)
+def test_numbers_that_cannot_be_waited_for_or_counted_are_refused_as_they_are_read(
+    argv: list[str], complaint: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as ended:
+        main(["flash", *argv])
+    assert ended.value.code == 2
+    assert_one_line(2, capsys.readouterr().err, f"particlebot: flash: argument {complaint}")
 
 
 def test_several_boards_without_port_or_many_are_not_guessed_between(

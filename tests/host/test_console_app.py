@@ -401,12 +401,15 @@ def test_with_a_fleet_the_console_shows_who_is_missing_unknown_or_duplicated() -
             "4": "NOT HEARD",
             "7": "NOT IN FLEET",
         }
-        assert "3 particles of 4 in the fleet" in screen_lines(app.query_one("#status", Static))[0]
+        status = screen_lines(app.query_one("#status", Static))[0]
+        assert "2 of 4 fleet particles heard, 1 not in the fleet" in status
         assert "DUPLICATE id 2" in log_text(app)
         await pilot.press("colon")
         app.query_one(Input).value = "forget 4"
         await pilot.press("enter")
         await refreshed(pilot)
         assert [row["id"] for row in table_text(app)] == ["1", "2", "3", "7"]
+        status = screen_lines(app.query_one("#status", Static))[0]
+        assert "2 of 3 fleet particles heard, 1 not in the fleet" in status
 
     run_app(test, size=(80, 24), fleet=fleet)

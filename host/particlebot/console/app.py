@@ -311,11 +311,16 @@ class ConsoleApp(App[int]):
         rows = model.rows()
         heard = [row for row in rows if row.heard]
         silent = sum(1 for row in heard if row.silent(model.clock(), model.silent_after))
-        count = f"{len(heard)} particle{'' if len(heard) == 1 else 's'}"
+        if model.roster is None:
+            count = f"{len(heard)} particle{'' if len(heard) == 1 else 's'}"
+        else:  # the fleet's particles heard (a duplicate id once); strangers are not of them
+            members = {row.id for row in heard if row.in_fleet}
+            strangers = sum(1 for row in heard if row.in_fleet is False)
+            count = f"{len(members)} of {len(model.roster)} fleet particles heard"
+            if strangers:
+                count += f", {strangers} not in the fleet"
         if silent:
             count += f" ({silent} silent)"
-        if model.roster is not None:
-            count += f" of {len(model.roster)} in the fleet"
         # Each line is cut rather than wrapped: a wrapped first line would push the counters of
         # bad frames out of the two lines the bar has.
         text = Text.assemble(

@@ -135,6 +135,11 @@ def test_ctrl_c_stops_the_swarm_first_then_ends_the_experiment(
         (('radio = "virtual', 'radio = "wireless'), 3, "radio: unknown radio kind 'wireless://'"),
         (("duration_s = 10\n", ""), 15, "trial 2: no duration: write duration_s = SECONDS"),
         (('name = "rehearsal"', "particles = 0"), 2, "particles: must be 1..253, not 0"),
+        (("loss=0.2", "loss=2"), 3, "radio: virtual://5?speed=max&loss=2&seed=4: loss must be"),
+        (("speed=max", "speed=0"), 3, "speed must be a number > 0 or max, not '0'"),
+        (('notes = "make test"', 'fleet = "nowhere.toml"'), 6, "fleet: no fleet file"),
+        (("duration_s = 25", "duration_s = 1e300"), 12, "must be at most 86400 s (a day)"),
+        (("pause_s = 0", "pause_s = 1e9"), 5, "pause_s: must be at most 86400 s"),
     ],
 )  # fmt: skip
 def test_a_bad_experiment_file_gets_one_line_naming_file_line_and_key(
@@ -203,3 +208,26 @@ def test_a_prompt_between_runs_waits_for_the_person(
     assert main(["run", str(write(tmp_path, text)), "--log-dir", str(tmp_path / "b")]) == 1
     out = capsys.readouterr().out
     assert "nobody can answer the prompt" in out and "[2/2]" not in out
+
+
+def test_a_radio_given_on_the_command_line_is_checked_before_anything_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write(tmp_path, TWO_TRIALS)
+    argv = ["run", str(path), "--log-dir", str(tmp_path / "logs")]
+    assert main([*argv, "--radio", "emulated://3?delay_ms=nan"]) == 2
+    (message,) = capsys.readouterr().err.splitlines()
+    assert "delay_ms must be a number >= 0, not 'nan'" in message
+    assert not (tmp_path / "logs").exists()
+
+
+def test_emulated_particles_stand_still_so_no_distance_toward_the_lamp_is_claimed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # kinematics=0: virtual particles that, like emulated ones, stay where they are put.
+    text = TWO_TRIALS.replace("seed=4", "seed=4&kinematics=0")
+    assert main(["run", str(write(tmp_path, text)), "--log-dir", str(tmp_path / "logs")]) == 0
+    (folder,) = (tmp_path / "logs").glob("rehearsal-*")
+    with (folder / "summary.csv").open() as file:
+        assert [row["toward_lamp_m"] for row in csv.DictReader(file)] == ["-", "-"]
+    capsys.readouterr()

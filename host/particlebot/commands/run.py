@@ -10,11 +10,12 @@ from particlebot.commands._common import fail, sigterm_as_interrupt
 from particlebot.experiments.plan import (
     Experiment,
     ExperimentFileError,
+    check_radio_url,
     is_simulated,
     load_experiment,
 )
 from particlebot.experiments.runner import Runner, expected_particles
-from particlebot.radio import RadioError, parse_radio_url
+from particlebot.radio import RadioError
 from particlebot.swarm.api import method_letter
 
 
@@ -38,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if not url:
         return fail(f'{experiment.path}: say which radio: radio = "URL" in the file, or --radio')
     try:
-        parse_radio_url(url)
+        check_radio_url(url)
     except RadioError as exc:
         return fail(str(exc))
     if expected_particles(experiment, url) is None and experiment.fleet is None:

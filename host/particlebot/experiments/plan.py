@@ -10,8 +10,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from particlebot.fleet import FleetFileError, load_fleet
 from particlebot.protocol import PARAM_SPECS, Method, Param
 from particlebot.radio import RadioError, parse_radio_url
+from particlebot.radio.faults import faults_from_url
 from particlebot.swarm.api import method_of
 
 BETWEEN = ("pause", "prompt", "none")
@@ -20,6 +22,8 @@ put the swarm back), or nothing."""
 ON_FAILURE = ("continue", "stop")
 """What a trial that cannot start (particles missing, START not confirmed) does to the rest."""
 SIMULATED = ("virtual", "emulated")
+LONGEST_S = 86_400.0
+"""No wait, pause or trial lasts more than a day: a longer one is a typo (1e300 would never end)."""
 
 _TOP_KEYS = {
     "name": "a name for the experiment (its log folder is named after it)",
@@ -179,6 +183,8 @@ class _Reader:
             raise self.error(
                 key, f"must be {'more than' if positive else 'at least'} 0, not {value}"
             )
+        if value > LONGEST_S:
+            raise self.error(key, f"must be at most {LONGEST_S:.0f} s (a day), not {value:g}")
         return float(value)
 
     def whole(
@@ -226,12 +232,18 @@ def _experiment(path: Path, document: dict[str, Any], lines: _Lines) -> Experime
     if radio is not None:
         radio = top.text(document, "radio", "")
         try:
-            parse_radio_url(radio)
+            check_radio_url(radio)
         except RadioError as exc:
             raise top.error("radio", str(exc)) from None
-    fleet = document.get("fleet")
-    log_dir = document.get("log_dir")
     folder = path.parent
+    fleet = None
+    if "fleet" in document:
+        fleet = folder / top.text(document, "fleet", "")
+        try:
+            load_fleet(fleet)  # read again by each trial: found wanting before the first
+        except FleetFileError as exc:
+            raise top.error("fleet", str(exc)) from None
+    log_dir = document.get("log_dir")
     between = top.choice(document, "between", "pause", BETWEEN)
     pause_s = top.number(document, "pause_s", 0.0) or 0.0
     raw_trials = document.get("trial")
@@ -248,7 +260,7 @@ def _experiment(path: Path, document: dict[str, Any], lines: _Lines) -> Experime
         path=path,
         name=top.text(document, "name", path.stem),
         radio=radio,
-        fleet=None if fleet is None else folder / top.text(document, "fleet", ""),
+        fleet=fleet,
         particles=particles,
         wait_s=top.number(document, "wait_s", 15.0, positive=True) or 15.0,
         on_failure=top.choice(document, "on_failure", "continue", ON_FAILURE),
@@ -331,3 +343,21 @@ def _settings(path: Path, lines: _Lines, number: int, table: object) -> dict[Par
 
 def is_simulated(url: str) -> bool:
     return parse_radio_url(url).scheme in SIMULATED
+
+
+def check_radio_url(url: str) -> None:
+    """The URL's options checked without opening the radio, so that a mistake shows before the
+    first trial rather than at it; RadioError says what is wrong. A real radio's own options
+    (baud, ...) are checked when it opens."""
+    parsed = parse_radio_url(url)
+    if parsed.scheme == "virtual":
+        from particlebot.radio.virtual import swarm_config_from_url as virtual_config
+
+        virtual_config(parsed)
+    elif parsed.scheme == "emulated":
+        from particlebot.radio.emulated import swarm_config_from_url as emulated_config
+
+        emulated_config(parsed)
+    if parsed.scheme in SIMULATED:
+        parsed.get_speed()
+    faults_from_url(parsed)

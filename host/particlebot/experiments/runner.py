@@ -19,7 +19,7 @@ from particlebot.logs.jsonl import LogError
 from particlebot.radio import RadioError, parse_radio_url
 from particlebot.swarm.api import Swarm, method_letter
 from particlebot.swarm.campaigns import ids_text
-from particlebot.swarm.results import NotConfirmed, ParticlesMissing, StopReport
+from particlebot.swarm.results import NotConfirmed, ParticlesMissing, StopReport, SwarmError
 
 PROGRESS_S = 30.0
 """A running trial says how far it got this often (the radio's time)."""
@@ -185,7 +185,7 @@ class Runner:
             outcome.interrupted = True
         except ExperimentStopped:
             outcome.stopped_early = True
-        except (RadioError, LogError, FleetFileError) as exc:
+        except (RadioError, LogError, FleetFileError, SwarmError) as exc:
             outcome.error = str(exc)
             if self.results and self.results[-1].problem is None:
                 self.results[-1].problem = outcome.error

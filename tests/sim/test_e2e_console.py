@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import csv
+from pathlib import Path
+
 import pytest
 
+from particlebot.cli import main
 from particlebot.protocol import State
 from particlebot.radio import InvalidRadioUrlError, RadioError, open_radio, parse_radio_url
 from particlebot.radio.emulated import swarm_config_from_url
@@ -65,3 +69,25 @@ def test_the_swarm_api_finds_starts_and_stops_emulated_particles_at_20_percent_l
         assert stop.confirmed, stop.text
         assert stop.stopped == (1, 2, 3)
         assert all(p.state == State.IDLE for p in swarm.particles())
+
+
+@pytest.mark.usefixtures("built_images")
+def test_an_experiment_runs_on_emulated_particles_and_claims_no_distance_they_did_not_move(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    experiment = tmp_path / "experiment.toml"
+    experiment.write_text(
+        'radio = "emulated://2?speed=max&loss=0.1"\n'
+        "[[trial]]\n"
+        'method = "D"\n'
+        "cycle_steps = 50\n"
+        "duration_s = 6\n"
+    )
+    assert main(["run", str(experiment), "--log-dir", str(tmp_path / "logs")]) == 0
+    out = capsys.readouterr().out
+    assert "run 1 started by 2 particle(s)" in out
+    (folder,) = (tmp_path / "logs").glob("experiment-*")
+    with (folder / "summary.csv").open() as file:
+        (row,) = csv.DictReader(file)
+    assert (row["stop_confirmed"], row["particles_lost"]) == ("yes", "0")
+    assert row["toward_lamp_m"] == "-"  # emulated particles stand where they were put

@@ -12,16 +12,17 @@ from particlebot.virtual.swarm import VirtualSwarm
 
 def lamp_distance(radio: Radio) -> float | None:
     """Ground distance (m) from the lamp's foot to the centroid of the particles, on a simulated
-    radio; None on a real one. The one place that reads the simulation's truth: when the 2-D
-    world replaces today's line, only this function changes."""
+    radio whose particles move; None on a real one, and where they cannot move (emulated
+    particles, virtual ones with kinematics=0): a distance that cannot change would read as a
+    method that failed. The one place that reads the simulation's truth: when the 2-D world
+    replaces today's line, only this function changes."""
     if not isinstance(radio, SwarmRadio):
         return None
     world = radio.swarm
-    if isinstance(world, VirtualSwarm):
+    if isinstance(world, EmulatedSwarm):
+        return None  # its particles stand where they were put
+    if isinstance(world, VirtualSwarm) and world.config.kinematics:
         points = [(p.x, p.y) for p in world.snapshot()]
-        lamp = world.config.lamp
-    elif isinstance(world, EmulatedSwarm):
-        points = list(world.positions)
         lamp = world.config.lamp
     else:
         return None

@@ -19,6 +19,7 @@ from particlebot.radio import (
     open_radio,
 )
 from particlebot.radio._port import translate_open_error
+from particlebot.radio.faults import FaultyRadio
 from particlebot.radio.serial import SerialRadio, contains_api_frame
 from particlebot.swarm.api import Swarm
 from tests.host.ptys import VanishingPty
@@ -135,3 +136,40 @@ def test_a_recording_on_a_silent_port_prints_the_hint(
     argv = ["log", "--radio", f"serial://{pty.path}", "--log-dir", str(log_dir), "--duration", "1"]
     assert main(argv) == 0
     assert "warning: Nothing heard for 0.2 s. Check that the base XBee" in capsys.readouterr().out
+
+
+def test_loss_on_a_real_link_drops_whole_frames_between_the_host_and_its_radio(
+    pty: VanishingPty,
+) -> None:
+    with open_radio(f"serial://{pty.path}?loss=0.5") as radio:
+        assert isinstance(radio, FaultyRadio)
+        for number in range(200):
+            radio.send(bytes([number]))
+        lost = radio.link_faults.lost
+        arrived = pty.read_until(200 - lost)
+    assert 40 <= lost <= 160  # 200 tries at one half: 1e-17 to fall outside
+    assert len(arrived) == 200 - lost
+    assert list(arrived) == sorted(arrived)  # in order, each whole or not at all
+
+
+def test_delay_on_a_real_link_holds_frames_both_ways(pty: VanishingPty) -> None:
+    with open_radio(f"serial://{pty.path}?delay_ms=300") as radio:
+        radio.send(b"late")
+        sent_at = radio.now()
+        assert pty.read_until(4, timeout=0.1) == b""  # held, however long nobody reads
+        arrived = b""
+        while not arrived and radio.now() < sent_at + 3:
+            radio.receive(timeout=0.1)  # sends what has waited its delay
+            arrived = pty.read_until(4, timeout=0.01)
+        assert arrived == b"late"
+        assert radio.now() >= sent_at + 0.3
+
+        pty.write(b"answer")
+        written_at = radio.now()
+        heard = b""
+        while len(heard) < 6 and radio.now() < written_at + 3:
+            packet = radio.receive(timeout=0.5)
+            if packet is not None:
+                assert radio.now() >= written_at + 0.3
+                heard += packet.data
+        assert heard == b"answer"

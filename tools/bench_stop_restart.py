@@ -1,0 +1,76 @@
+"""STOP pressed right after the base station restarts during a run at 50 % loss: how often it is
+called confirmed while a particle still moves, over many seeds, with and without the grace period.
+
+    python tools/bench_stop_restart.py [--seeds 100] [--particles 6 10] [--loss 0.5]
+
+For each seed a session starts a run on virtual particles and is closed (the console quit, the
+laptop rebooted); a new session, which has heard nobody, sends STOP at once. Its verdict is set
+against what the particles' logic really does. Prints one line per particle count and grace
+period, for README ("Who must confirm a STOP"); tests/host/test_swarm_roster.py runs 50 seeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+from particlebot import Swarm
+from particlebot.firmware.native import NativeParticle
+from particlebot.protocol import State
+from particlebot.radio.virtual import VirtualRadio, lose_on_air
+from particlebot.swarm.roster import STOPPED_STATES
+from particlebot.swarm.tracker import STOP_GRACE_S
+from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+
+
+def still_moving(world: VirtualSwarm) -> int:
+    """Particles whose logic is not stopped, whatever the radio said."""
+    moving = 0
+    for member in world.members:
+        firmware = member.firmware
+        assert isinstance(firmware, NativeParticle)
+        moving += State(firmware.status().state) not in STOPPED_STATES
+    return moving
+
+
+def restart_and_stop(seed: int, count: int, loss: float, grace: float) -> tuple[bool, int, float]:
+    """(called confirmed, particles still moving, seconds to the verdict) for one seed."""
+    world = VirtualSwarm(SwarmConfig(count=count, seed=seed, kinematics=False))
+    lose_on_air(world, loss, seed)
+    with Swarm(VirtualRadio(world, url="virtual://"), log_dir=None) as first:
+        first.wait_for(count=count, timeout=60)
+        first.send_start("D", cycle_steps=75)
+        first.sleep(4.0)
+    with Swarm(VirtualRadio(world, url="virtual://"), log_dir=None, stop_grace=grace) as second:
+        report = second.stop()
+    return report.confirmed, still_moving(world), report.seconds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=100)
+    parser.add_argument("--particles", type=int, nargs="+", default=[6, 10])
+    parser.add_argument("--loss", type=float, default=0.5)
+    args = parser.parse_args()
+    for count in args.particles:
+        for grace in (STOP_GRACE_S, 0.0):
+            began = time.perf_counter()
+            confirmed = false = 0
+            seconds = []
+            for seed in range(1, args.seeds + 1):
+                verdict, moving, took = restart_and_stop(seed, count, args.loss, grace)
+                confirmed += verdict
+                false += verdict and moving > 0
+                seconds.append(took)
+            print(
+                f"{count} particles, {args.seeds} seeds, loss {args.loss:g}, grace {grace:g} s: "
+                f"{confirmed} confirmed, {false} of them falsely; verdict after "
+                f"{statistics.median(seconds):.1f} s median, {max(seconds):.1f} s at most "
+                f"({time.perf_counter() - began:.0f} s wall)",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()

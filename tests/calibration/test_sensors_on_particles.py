@@ -11,8 +11,15 @@ import pytest
 
 from particlebot.calibration.bench import Bench, calibrate_sensors, readings_meta
 from particlebot.calibration.photocells import GAIN_PARAMS, GAMMA_PARAMS
-from particlebot.calibration.placements import Placement, SimulatedPlacer, ring, trials
+from particlebot.calibration.placements import (
+    PersonPlacer,
+    Placement,
+    SimulatedPlacer,
+    ring,
+    trials,
+)
 from particlebot.calibration.positions import check_positions
+from particlebot.calibration.prompts import NobodyAnswers, Prompter, Quit
 from particlebot.calibration.readings import Readings, ReadingsWriter, read_readings
 from particlebot.cli import main
 from particlebot.experiments.measure import place
@@ -207,3 +214,46 @@ def run_cli(args: list[str]) -> int:
         return main(args)
     except SystemExit as exit_:
         return int(exit_.code or 0)
+
+
+def test_a_person_is_told_where_each_particle_goes_and_enter_takes_the_readings(
+    tmp_path: Path,
+) -> None:
+    out = io.StringIO()
+    plan = ring([1, 2, 3], [20, 60, 100])
+    told: list[str] = []
+    with Swarm.open("virtual://3?speed=max&photocell_spread=0.1", log_dir=None) as swarm:
+        swarm.wait_for(count=3)
+
+        def person(prompt: str) -> str:
+            # Does what the last instruction said, then presses Enter.
+            told.append(out.getvalue().splitlines()[-1])
+            placement = plan[len(told) - 1]
+            place(swarm.radio, {i: (d / 100, 0.0) for i, d in placement.distances_cm.items()})
+            return ""
+
+        bench = Bench(swarm, PersonPlacer(Prompter(person), out), out, frames=2)
+        readings = measured(bench, plan, tmp_path / "r.csv")
+        outcome = calibrate_sensors(readings, 28.0, bench=None, fleet_path=None)
+    assert told[1].startswith("Step 2 of 3: put particles 1-3 on a circle 60 cm from")
+    assert len(outcome.calibration.fits) == 3
+
+
+@pytest.mark.parametrize(("answer", "raised"), [("q", Quit), (None, NobodyAnswers)])
+def test_a_person_who_quits_or_is_not_there_stops_it_before_anything_is_written(
+    tmp_path: Path, answer: str | None, raised: type[Exception]
+) -> None:
+    def person(prompt: str) -> str:
+        if answer is None:
+            raise EOFError
+        return answer
+
+    out = io.StringIO()
+    with Swarm.open("virtual://2?speed=max", log_dir=None) as swarm:
+        swarm.wait_for(count=2)
+        bench = Bench(swarm, PersonPlacer(Prompter(person), out), out)
+        with pytest.raises(raised):
+            measured(bench, ring([1, 2], [20, 60]), tmp_path / "r.csv")
+        assert swarm.get(Param.SENSOR_GAIN_0).values == {1: 1000, 2: 1000}
+    # The readings file is there, with its header: nothing half written.
+    assert (tmp_path / "r.csv").read_text().count("\n") == len(readings_meta("", "", 1, 1)) + 2

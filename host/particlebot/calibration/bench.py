@@ -167,6 +167,8 @@ def calibrate_sensors(
         bench.set_all(particle_id, calibration.corrections[particle_id].params())
         outcome.written.append(particle_id)
     bench.say(f"Wrote SENSOR_GAMMA_0..5 and SENSOR_GAIN_0..5 to particle(s) {ids_text(ids)}.")
+    if fleet_path is not None:  # what the particles hold now, whatever happens next
+        outcome.notes += record_in_fleet(fleet_path, outcome, None)
     chosen = ids[0] if reference_id is None else reference_id
     if chosen not in calibration.corrections:
         raise CalibrationError(f"the reference particle {chosen} is not among those calibrated")
@@ -191,12 +193,13 @@ def calibrate_sensors(
         bench.set_all(particle_id, {Param.REF_VALUE: value, Param.REF_DISTANCE_MM: distance_mm})
     bench.say(f"Wrote REF_VALUE {value} and REF_DISTANCE_MM {distance_mm} (method A) to them.")
     if fleet_path is not None:
-        outcome.notes += record_in_fleet(fleet_path, outcome, distance_mm)
+        record_in_fleet(fleet_path, outcome, distance_mm)
     return outcome
 
 
-def record_in_fleet(fleet_path: Path, outcome: SensorOutcome, distance_mm: int) -> list[str]:
-    """The fleet's law and each particle's parameters, into the fleet file."""
+def record_in_fleet(fleet_path: Path, outcome: SensorOutcome, distance_mm: int | None) -> list[str]:
+    """The fleet's law and each particle's parameters (with method A's reference once it is
+    captured: distance_mm), into the fleet file."""
     notes = []
     law = outcome.calibration.law
     try:
@@ -209,7 +212,7 @@ def record_in_fleet(fleet_path: Path, outcome: SensorOutcome, distance_mm: int) 
                     continue
                 values = {param.name: value for param, value in correction.params().items()}
                 record.calibration.update(values)
-                if outcome.reference_value is not None:
+                if outcome.reference_value is not None and distance_mm is not None:
                     record.calibration[Param.REF_VALUE.name] = outcome.reference_value
                     record.calibration[Param.REF_DISTANCE_MM.name] = distance_mm
     except (FleetFileError, FleetError, OSError) as exc:

@@ -257,3 +257,27 @@ def test_a_person_who_quits_or_is_not_there_stops_it_before_anything_is_written(
         assert swarm.get(Param.SENSOR_GAIN_0).values == {1: 1000, 2: 1000}
     # The readings file is there, with its header: nothing half written.
     assert (tmp_path / "r.csv").read_text().count("\n") == len(readings_meta("", "", 1, 1)) + 2
+
+
+def test_a_readings_file_that_cannot_be_fitted_or_written_gets_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    one = tmp_path / "one.csv"
+    one.write_text("id,distance_cm,A0,A1,A2,A3,A4,A5\n1,40,900,901,902,903,904,905\n")
+    four = tmp_path / "four.csv"
+    four.write_text(
+        "id,distance_cm,A0,A1,A2,A3,A4,A5\n"
+        + "".join(
+            f"{i},{d},{v},{v},{v},{v},{v},{v}\n"
+            for i in (1, 2, 3, 4)
+            for d, v in ((20, 950), (80, 700))
+        )
+    )
+    for args, message in (
+        (["--readings", str(one)], "particle 1 has readings at one distance only (40 cm)"),
+        (["--readings", str(four), "--radio", "virtual://2"], "missing 3, 4"),
+    ):
+        assert run_cli(["calibrate", "sensors", *args]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err

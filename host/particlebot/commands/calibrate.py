@@ -131,9 +131,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="then Fig. S5's check (see calibrate check) on the same particles, --trials times",
     )
-    sensors.add_argument(
-        "--trials", type=int_arg(Bounds(minimum=1, maximum=100)), default=5, help="(--check)"
-    )
+    _trials_option(sensors)
     sensors.add_argument(
         "--new-law",
         action="store_true",
@@ -158,9 +156,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number_list(NON_NEGATIVE),
         help="each particle's place (cm), in id order",
     )
-    check.add_argument(
-        "--trials", type=int_arg(Bounds(minimum=1, maximum=100)), default=5, help="(5, Fig. S5)"
-    )
+    _trials_option(check)
     check.add_argument("--readings", type=Path, help="draw this readings CSV; measure nothing")
     _reading_options(check, frames=3)
 
@@ -176,6 +172,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="nine pulses (us) to hold (default: the particle's own table)",
     )
     servo.add_argument("-o", "--output", type=Path, help="CSV of the points (and a PNG beside)")
+
+
+def _trials_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--trials",
+        type=int_arg(Bounds(minimum=1, maximum=100)),
+        default=5,
+        help="Fig. S5's trials: the line laid out afresh each time (5, as in the paper)",
+    )
 
 
 def _particle_options(parser: argparse.ArgumentParser) -> None:
@@ -218,6 +223,7 @@ def run(args: argparse.Namespace) -> int:
     from particlebot.fleet import FleetFileError
     from particlebot.logs.jsonl import LogError
     from particlebot.radio import RadioError
+    from particlebot.swarm.results import SwarmError
 
     action = args.calibrate_action
     out = sys.stdout
@@ -245,6 +251,7 @@ def run(args: argparse.Namespace) -> int:
         RadioError,
         LogError,
         FleetFileError,
+        SwarmError,
         ValueError,
     ) as exc:
         return fail(f"calibrate {action}: {exc}")

@@ -21,6 +21,7 @@ from particlebot.calibration.servo_bench import (
     ServoBench,
     calibrate_servo,
 )
+from particlebot.cli import main
 from particlebot.fleet import Fleet, ParticleRecord, load_fleet, save_fleet
 from particlebot.protocol import PARAM_SPECS, Param, State
 from particlebot.swarm.api import Swarm
@@ -208,3 +209,17 @@ def test_the_command_with_nobody_to_answer_says_so_in_one_line(tmp_path: Path) -
         "particlebot: calibrate servo: nobody can answer the prompt (no input): stopped, nothing "
         "more was written; answer on a terminal, or give the answers on stdin"
     ]
+
+
+def test_a_table_that_would_not_be_monotonic_ends_the_command_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    radii = ["80", "84", "88", "92", "90", "100", "104", "108", "112"]  # point 4 shrinks
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n".join(radii) + "\n"))
+    assert main(["calibrate", "servo", "2", "--radio", "virtual://3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "point 4 (90 mm at 1370 us) is not above point 3" in err[0]
+    assert err[0].endswith("nothing was written")
+    assert not (tmp_path / "calibration").exists()

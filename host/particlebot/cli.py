@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "track": "track the swarm on video: centroid per frame as TRACK.csv, contact sheet",
     "stats": "Table S2 for tracks and simulator runs: speeds toward the lamp, t-test, plots",
     "render": "a synthetic top-view video with known centroids (tracker ground truth)",
+    "calibrate": "calibrate photocells and servo tables; check position estimates (Fig. S5)",
 }
 
 

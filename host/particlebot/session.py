@@ -143,6 +143,12 @@ class Session:
         with self._listeners_lock:
             self._listeners.append(listener)
 
+    def remove_listener(self, listener: Listener) -> None:
+        """Stops telling listener anything (not even on_close); one never added is ignored."""
+        with self._listeners_lock:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
     def now(self) -> float:
         return self.radio.now()
 

@@ -23,6 +23,7 @@ from particlebot.fleet import (
     FleetFileError,
     FleetKey,
     ParticleRecord,
+    PhotocellLaw,
     create_fleet,
     load_fleet,
     render,
@@ -52,6 +53,7 @@ def sample_fleet() -> Fleet:
         )
     )
     fleet.record(ParticleRecord(1))
+    fleet.photocells = PhotocellLaw(0.5614, "m2", WHEN)
     return fleet
 
 
@@ -63,6 +65,7 @@ def test_a_fleet_survives_a_round_trip_through_its_file(tmp_path: Path) -> None:
     text = path.read_text()
     assert "pan_id = 0x1A2B" in text and "definition_hash = 0xDCF5A94F" in text
     assert text.index("[particles.1]") < text.index("[particles.3]")
+    assert "[photocells]\nscale = 0.5614" in text
 
 
 def test_the_roster_answers_the_console_s_questions() -> None:
@@ -210,6 +213,20 @@ def test_a_missing_file_says_how_to_make_one(tmp_path: Path) -> None:
             f'[radio]\npan_id = 1\nchannel = 12\nkey = "{KEY_HEX}"\n'
             "[particles.2]\nflashed_at = 2025-01-01T00:00:00\n",
             "UTC offset",
+        ),
+        (
+            f'[radio]\npan_id = 1\nchannel = 12\nkey = "{KEY_HEX}"\n[photocells]\nscale = "a"\n',
+            "scale must be a number",
+        ),
+        (
+            f'[radio]\npan_id = 1\nchannel = 12\nkey = "{KEY_HEX}"\n[photocells]\nscale = -1.0\n'
+            'unit = "m2"\n',
+            "above 0",
+        ),
+        (
+            f'[radio]\npan_id = 1\nchannel = 12\nkey = "{KEY_HEX}"\n[photocells]\nscale = 0.5\n'
+            'unit = "cm"\n',
+            "unit must be 'm2' or '1/lux'",
         ),
     ],
 )

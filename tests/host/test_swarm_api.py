@@ -160,3 +160,52 @@ def test_lost_copies_on_the_virtual_air_follow_the_seed() -> None:
 
     assert losses(3) == losses(3) != losses(4)
     assert 10 < sum(losses(3)) < 40
+
+
+def test_a_held_servo_puts_out_its_pulse_until_released() -> None:
+    with Swarm.open("virtual://3?speed=max&loss=0.2&seed=4", log_dir=None) as swarm:
+        swarm.wait_for(count=3)
+        world = swarm.radio.swarm  # type: ignore[attr-defined]
+        firmware = world.members[1].firmware
+        held = swarm.hold_servo(2, 1830, 20)
+        assert held.state == State.HOLDING and held.status is not None
+        assert held.status.servo_pulse_us == 1830 == firmware.servo_pulse_us
+        swarm.sleep(5)
+        assert firmware.servo_pulse_us == 1830
+        released = swarm.release_servo(2)
+        assert released.state == State.IDLE
+        assert firmware.servo_pulse_us == swarm.get("servo_cal_0", of=2).values[2]
+        # The others never held anything.
+        assert {p.state for p in swarm.particles() if p.id != 2} == {State.IDLE}
+
+
+def test_a_hold_is_refused_with_why_running_unknown_or_out_of_range() -> None:
+    with Swarm.open("virtual://2?speed=max", log_dir=None) as swarm:
+        swarm.wait_for(count=2)
+        with pytest.raises(NotConfirmed, match=r"particle 9 did not confirm .*not heard"):
+            swarm.hold_servo(9, 1500)
+        swarm.start("D")
+        with pytest.raises(NotConfirmed, match=r"particle 1 did not confirm .*STOP it first"):
+            swarm.hold_servo(1, 1500)
+        swarm.stop()
+        with pytest.raises(ValueError, match=r"500\.\.2500"):
+            swarm.hold_servo(1, 3000)
+        with pytest.raises(ValueError, match=r"1\.\.255 s"):
+            swarm.hold_servo(1, 1500, 0)
+
+
+def test_sample_collects_fresh_status_reports_of_each_particle() -> None:
+    with Swarm.open("virtual://5?speed=max&loss=0.2&seed=3", log_dir=None) as swarm:
+        swarm.wait_for(count=5)
+        asked = swarm.now()
+        reports = swarm.sample([1, 3, 5], frames=4)
+        assert sorted(reports) == [1, 3, 5]
+        assert all(len(r) == 4 for r in reports.values())
+        # Fresh ones, asked for rather than waited for: far sooner than 4 periods of 2 s.
+        assert swarm.now() - asked < 4
+        # Four different reports of each, in the order sent.
+        for particle_reports in reports.values():
+            uptimes = [r.uptime_ms for r in particle_reports]
+            assert uptimes == sorted(set(uptimes))
+        with pytest.raises(ParticlesMissing, match="7 sent 0"):
+            swarm.sample([1, 7], frames=2, timeout=3)

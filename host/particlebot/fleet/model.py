@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import hashlib
+import math
 import re
 import secrets
 from dataclasses import dataclass, field
@@ -120,12 +121,40 @@ class ParticleRecord:
     note: str | None = None
     """Free text for people ("left wheel sticks"); the tools keep it."""
     calibration: dict[str, int] = field(default_factory=dict)
-    """Calibration parameters in its EEPROM when flashed (servo table), by parameter name."""
+    """Calibration parameters in its EEPROM, by parameter name: the servo table as flashed or
+    calibrated, the photocells' SENSOR_GAMMA_k and SENSOR_GAIN_k, REF_VALUE."""
 
     def __post_init__(self) -> None:
         check_id(self.id)
         if self.radio_address is not None:
             self.radio_address = normalize_address(self.radio_address)
+
+
+PHOTOCELL_UNITS = {
+    "m2": "x is r^2 in square metres, r from the lamp to the photocells",
+    "1/lux": "x is 1 / the illuminance in lux",
+}
+"""What the light level x of a fleet's photocell law rho' = scale * x is measured in."""
+
+
+@dataclass
+class PhotocellLaw:
+    """The law every calibrated photocell of the fleet follows after its SENSOR_GAMMA_k and
+    SENSOR_GAIN_k: rho' = scale * x (rho' the corrected resistance over the load's), so that
+    eq. 14 holds across the fleet. Particles calibrated later join it."""
+
+    scale: float
+    unit: str = "m2"
+    calibrated_at: dt.datetime | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.scale) and self.scale > 0):
+            raise FleetError(f"the photocell scale must be a number above 0, not {self.scale}")
+        if self.unit not in PHOTOCELL_UNITS:
+            raise FleetError(
+                f"the photocell unit must be {' or '.join(map(repr, PHOTOCELL_UNITS))}, "
+                f"not {self.unit!r}"
+            )
 
 
 @dataclass
@@ -146,6 +175,8 @@ class Fleet:
     key: FleetKey
     base_station: BaseStationRecord | None = None
     particles: dict[int, ParticleRecord] = field(default_factory=dict)
+    photocells: PhotocellLaw | None = None
+    """Set by `particlebot calibrate sensors`."""
 
     def __post_init__(self) -> None:
         if self.pan_id not in PAN_IDS:

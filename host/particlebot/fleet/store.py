@@ -25,6 +25,7 @@ from particlebot.fleet.model import (
     FleetError,
     FleetKey,
     ParticleRecord,
+    PhotocellLaw,
 )
 from particlebot.fleet.toml_writer import Hex, Table, Value, dumps
 
@@ -39,9 +40,10 @@ PRIVATE_MODE = 0o600
 
 _HEADER = """\
 particlebot fleet file: the radio network of one experiment and every particle in it.
-Written by `particlebot fleet init`, `particlebot flash` and `particlebot radio setup`; values may
-be edited by hand (comments are not kept). It holds the radios' AES key: keep it private (mode
-0600, which the tools insist on) and out of version control."""
+Written by `particlebot fleet init`, `particlebot flash`, `particlebot radio setup` and
+`particlebot calibrate`; values may be edited by hand (comments are not kept). It holds the
+radios' AES key: keep it private (mode 0600, which the tools insist on) and out of version
+control."""
 
 _PARTICLE_KEYS = (
     "board_serial",
@@ -100,7 +102,7 @@ def check_private(path: Path, mode: int) -> None:
 
 
 def _fleet_from(document: Mapping[str, Any]) -> Fleet:
-    _only(document, ("version", "radio", "base_station", "particles"), "the file")
+    _only(document, ("version", "radio", "base_station", "photocells", "particles"), "the file")
     version = document.get("version", FORMAT_VERSION)
     if version != FORMAT_VERSION:
         raise FleetError(f"format version {version} is not {FORMAT_VERSION}; update particlebot")
@@ -117,6 +119,17 @@ def _fleet_from(document: Mapping[str, Any]) -> Fleet:
         fleet.base_station = BaseStationRecord(
             radio_address=_str(base, "radio_address", "[base_station]"),
             radio_configured_at=_time(base, "radio_configured_at", "[base_station]"),
+        )
+    law = _table(document, "photocells", required=False)
+    if law:
+        _only(law, ("scale", "unit", "calibrated_at"), "[photocells]")
+        scale = law.get("scale")
+        if not isinstance(scale, int | float) or isinstance(scale, bool):
+            raise FleetError("[photocells]: scale must be a number")
+        fleet.photocells = PhotocellLaw(
+            scale=float(scale),
+            unit=_str(law, "unit", "[photocells]"),
+            calibrated_at=_time(law, "calibrated_at", "[photocells]"),
         )
     for name, entry in _table(document, "particles", required=False).items():
         where = f"[particles.{name}]"
@@ -217,6 +230,14 @@ def render(fleet: Fleet) -> str:
                     "radio_address": base.radio_address,
                     "radio_configured_at": base.radio_configured_at,
                 },
+            )
+        )
+    if fleet.photocells is not None:
+        law = fleet.photocells
+        tables.append(
+            Table(
+                ["photocells"],
+                {"scale": law.scale, "unit": law.unit, "calibrated_at": law.calibrated_at},
             )
         )
     for particle_id in fleet.roster_ids():

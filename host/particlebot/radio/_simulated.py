@@ -6,10 +6,13 @@ import queue
 from abc import abstractmethod
 from typing import Generic, Protocol, TypeVar
 
-from particlebot.options import POSITIVE, OptionError, parse_float
+from particlebot.options import POSITIVE, Bounds, OptionError, parse_float
 from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
 from particlebot.radio.faults import LinkFaults
 from particlebot.virtual.light import Lamp
+from particlebot.virtual.photocells import MAX_SPREAD
+
+PHOTOCELL_SPREAD = Bounds(minimum=0, maximum=MAX_SPREAD)
 
 
 def parse_count(url: RadioUrl, default: int, maximum: int) -> int:
@@ -41,6 +44,12 @@ def parse_lamp(url: RadioUrl) -> Lamp:
             f"{url.text}: lamp=X,Y,H in metres, H above the photocells, e.g. lamp=0,0,0.28"
         ) from None
     return Lamp(x, y, height)
+
+
+def parse_photocell_spread(url: RadioUrl) -> float:
+    """photocell_spread=S: every simulated photocell its own gamma (1 +- S) and resistance, as
+    real CdS cells have (something to calibrate); 0, the default, makes them all ideal."""
+    return url.get_float("photocell_spread", 0.0, PHOTOCELL_SPREAD)
 
 
 class SimulatedSwarm(Protocol):

@@ -1,7 +1,7 @@
 """A base-station radio on emulated air with simavr particles running the real firmware image.
 
 emulated://K?loss=0.2&delay_ms=5&speed=1&spacing=0.155&start=0.10&lamp=X,Y,H&seed=1&elf=PATH
-&base_baud=9600&buffer=256&scenario=line:
+&base_baud=9600&buffer=256&scenario=line&photocell_spread=0.1:
 K particles (ids 1..K) in a line from the lamp, each the ELF that
 `make firmware` builds, in tools/sim/particle_sim (`make harness`), on 802.15.4 air as
 particlebot.sim.medium models it. speed=max runs as fast as the machine allows.
@@ -14,7 +14,12 @@ from typing import Self
 
 from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds
 from particlebot.radio import RadioError, RadioUrl
-from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
+from particlebot.radio._simulated import (
+    SwarmRadio,
+    parse_count,
+    parse_lamp,
+    parse_photocell_spread,
+)
 from particlebot.radio.faults import (
     FAULT_OPTIONS,
     SIMULATION_OPTIONS,
@@ -32,6 +37,7 @@ OPTIONS = {
     "elf",
     "base_baud",
     "buffer",
+    "photocell_spread",
     *FAULT_OPTIONS,
     *SIMULATION_OPTIONS,
 }
@@ -57,6 +63,7 @@ def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
         # A whole 100-byte RF packet must fit, or the radio could never pass one on.
         buffer_bytes=url.get_int("buffer", 256, Bounds(minimum=100)),
         keep_history=False,
+        photocell_spread=parse_photocell_spread(url),
     )
 
 

@@ -7,7 +7,12 @@ from typing import Self
 
 from particlebot.options import NON_NEGATIVE, POSITIVE, SWITCH
 from particlebot.radio import RadioError, RadioUrl
-from particlebot.radio._simulated import SwarmRadio, parse_count, parse_lamp
+from particlebot.radio._simulated import (
+    SwarmRadio,
+    parse_count,
+    parse_lamp,
+    parse_photocell_spread,
+)
 from particlebot.radio.faults import (
     FAULT_OPTIONS,
     SIMULATION_OPTIONS,
@@ -26,6 +31,7 @@ OPTIONS = {
     "start",
     "kinematics",
     "noise",
+    "photocell_spread",
     *FAULT_OPTIONS,
     *SIMULATION_OPTIONS,
 }
@@ -34,7 +40,8 @@ LOSS_SEED = 0x10557
 
 
 def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
-    """virtual://N?lamp=X,Y,H&spacing=M&start=M&seed=S&kinematics=0|1&noise=SIGMA (metres)."""
+    """virtual://N?lamp=X,Y,H&spacing=M&start=M&seed=S&kinematics=0|1&noise=SIGMA (metres)
+    &photocell_spread=S."""
     url.check_options(OPTIONS)
     scenario_from_url(url)
     return SwarmConfig(
@@ -45,6 +52,7 @@ def swarm_config_from_url(url: RadioUrl) -> SwarmConfig:
         kinematics=url.get_int("kinematics", 1, SWITCH) != 0,
         seed=url.get_int("seed", 1, NON_NEGATIVE),
         noise=url.get_float("noise", 0.0, NON_NEGATIVE),
+        photocell_spread=parse_photocell_spread(url),
     )
 
 

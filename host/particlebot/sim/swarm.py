@@ -37,6 +37,7 @@ from particlebot.protocol import (
 from particlebot.sim.harness import CPU_HZ, ParticleSim, default_elf
 from particlebot.sim.medium import BASE, BAUD, DEFAULT_BUFFER_BYTES, NOISE, AirPacket, Medium
 from particlebot.virtual.light import ADC_FULL_SCALE, Lamp, LightField
+from particlebot.virtual.photocells import Photocells
 
 AVCC_MV = 3300
 PACED_STEP_S = 0.01
@@ -112,6 +113,8 @@ class SwarmConfig:
     harness: Path | None = None
     keep_history: bool = True
     """Keep every UART byte, servo pulse and packet (tests); off, memory stays bounded."""
+    photocell_spread: float = 0.0
+    """0: every photocell the ideal one; s: gamma within 1 +- s and so on (Photocells.spread)."""
 
 
 @dataclass(frozen=True)
@@ -144,7 +147,10 @@ class EmulatedSwarm(Paced):
         if not 0 < config.quantum_us <= MAX_QUANTUM_US:
             raise ValueError(f"quantum_us must be in (0, {MAX_QUANTUM_US}]")
         self.config = config
-        self.light = LightField(config.lamp)
+        cells = None
+        if config.photocell_spread:
+            cells = Photocells.spread(config.count, config.photocell_spread, config.seed)
+        self.light = LightField(config.lamp, photocells=cells)
         if config.positions is not None:
             if len(config.positions) != config.count:
                 raise ValueError("one position per particle")
@@ -205,7 +211,7 @@ class EmulatedSwarm(Paced):
     def sensor_values(self, index: int) -> list[int]:
         """The six readings (0..1023) the light field gives particle index where it stands."""
         x, y = self.positions[index]
-        return self.light.sensor_values(x, y)
+        return self.light.sensor_values(x, y, particle=index)
 
     def sensor_millivolts(self, index: int) -> list[int]:
         return [light_to_millivolts(v) for v in self.sensor_values(index)]

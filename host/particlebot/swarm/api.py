@@ -21,11 +21,13 @@ from particlebot.protocol import (
     Method,
     Param,
     ParamResult,
+    State,
+    Status,
 )
 from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio, parse_radio_url
 from particlebot.radio._simulated import SwarmRadio
-from particlebot.session import Session
-from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery
+from particlebot.session import Listener, ReceivedFrame, Session
+from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery, ids_text
 from particlebot.swarm.results import (
     IdInUse,
     NotConfirmed,
@@ -47,6 +49,12 @@ POLL_S = 0.05
 WAIT_PING_S = 1.0
 """wait_for() asks every particle for a STATUS this often, rather than waiting 2 s for each."""
 SET_ID_TIMEOUT_S = 5.0
+SAMPLE_PING_S = 0.3
+"""sample() asks the particles still short of STATUS reports this often, a few at a time: four
+replies (52 bytes each) fill about 0.22 s of a 9600-baud link."""
+SAMPLE_PINGS = 4
+SERVO_PULSES = range(PARAM_SPECS[Param.SERVO_CAL_0].min, PARAM_SPECS[Param.SERVO_CAL_0].max + 1)
+"""Pulses a servo may be held at: the servo table's range (the firmware's 500..2500 us)."""
 SIMULATED_SCHEMES = ("virtual", "emulated")
 
 METHODS: dict[str, Method] = {
@@ -452,6 +460,71 @@ class Swarm:
         """Writes a remark into the session log (and shows it in a console)."""
         self.tracker.note(text)
 
+    def sample(
+        self, ids: Collection[int], frames: int = 5, *, timeout: float = 20.0
+    ) -> dict[int, list[Status]]:
+        """Collects `frames` STATUS reports sent from now on by each particle of ids (PINGing
+        those still short, a few at a time), e.g. to average light readings: each report's
+        sensors are 50-sample means. ParticlesMissing names who fell short after timeout."""
+        wanted = sorted(set(ids))
+        if not wanted or frames < 1:
+            raise ValueError("sample() needs particle ids and frames >= 1")
+        recorder = _StatusRecorder(set(wanted), self.now())
+        self.session.add_listener(recorder)
+        next_ping = self.now()
+        asked: dict[int, int] = dict.fromkeys(wanted, 0)
+
+        def enough() -> bool:
+            nonlocal next_ping
+            counts = recorder.counts()
+            short = [i for i in wanted if counts.get(i, 0) < frames]
+            if not short:
+                return True
+            if self.now() >= next_ping - CLOCK_SLACK_S:
+                next_ping = self.now() + SAMPLE_PING_S
+                for particle_id in sorted(short, key=lambda i: (asked[i], i))[:SAMPLE_PINGS]:
+                    asked[particle_id] += 1
+                    with contextlib.suppress(ReadOnlyRadioError):
+                        self.tracker.ping(particle_id)
+            return False
+
+        try:
+            complete = self._wait(enough, self.now() + timeout)
+        finally:
+            self.session.remove_listener(recorder)
+        reports = recorder.reports()
+        if not complete:
+            short = [i for i in wanted if len(reports.get(i, [])) < frames]
+            heard = [i for i in wanted if i not in short]
+            raise ParticlesMissing(
+                f"waited {timeout:g} s for {frames} STATUS reports from each of particles "
+                f"{ids_text(wanted)}: "
+                + "; ".join(f"{i} sent {len(reports.get(i, []))}" for i in short),
+                tuple(heard),
+                tuple(short),
+            )
+        return {i: reports[i][:frames] for i in wanted}
+
+    def hold_servo(self, particle_id: int, pulse_us: int, seconds: int = 30) -> Particle:
+        """Makes a resting particle (IDLE or DONE) hold its servo at pulse_us (servo
+        calibration) for seconds (the firmware holds at most 60: send it again to hold longer),
+        and returns once its STATUS shows the hold. stop(), start(), identify() and
+        release_servo() end a hold. NotConfirmed says why not: it runs (STOP it first), or it
+        did not answer."""
+        if pulse_us not in SERVO_PULSES:
+            raise ValueError(
+                f"servo pulses are {SERVO_PULSES.start}..{SERVO_PULSES.stop - 1} us, not {pulse_us}"
+            )
+        if not 1 <= seconds <= 255:
+            raise ValueError(f"a hold lasts 1..255 s (the firmware caps it at 60), not {seconds}")
+        return self._servo_hold(particle_id, pulse_us, seconds)
+
+    def release_servo(self, particle_id: int) -> Particle:
+        """Ends particle_id's hold (SERVO_HOLD for 0 s): its servo goes straight back to the
+        contracted radius's pulse. Returns once its STATUS shows it no longer holding;
+        NotConfirmed otherwise (the firmware still ends the hold when its time is up)."""
+        return self._servo_hold(particle_id, 0, 0)
+
     # ---- for UIs: commands that return at once ---------------------------------------------
 
     def send_start(
@@ -512,6 +585,34 @@ class Swarm:
             self._follow_rename(rename)
 
     # ---- internals -------------------------------------------------------------------------
+
+    def _servo_hold(self, particle_id: int, pulse_us: int, seconds: int) -> Particle:
+        if particle_id in (BROADCAST_ID, UNASSIGNED_ID):
+            raise ValueError("SERVO_HOLD names one particle by its id")
+        what = f"SERVO_HOLD {pulse_us} us for {seconds} s" if seconds else "the end of the hold"
+        campaign = self.tracker.servo_hold(particle_id, pulse_us, seconds)
+        self._finish(campaign)
+        particle = self.particle(particle_id)
+        if campaign.success and campaign.confirmed and particle is not None:
+            return particle
+        if not campaign.confirmed and not campaign.pending and not campaign.send_failures:
+            why = "not heard in this session (wait_for it first)"
+        else:
+            status = particle.status if particle else None
+            running = status is not None and status.state not in (
+                State.IDLE,
+                State.DONE,
+                State.HOLDING,
+            )
+            if running and status is not None:
+                why = f"it is {State(status.state).name}, not at rest: STOP it first"
+            else:
+                reasons = self._unconfirmed(campaign)
+                why = reasons[0].reason if reasons else campaign.outcome
+        raise NotConfirmed(
+            f"particle {particle_id} did not confirm {what}: {why}",
+            (Unconfirmed(particle_id, why),),
+        )
 
     def _wait(self, done: Callable[[], bool], deadline: float | None) -> bool:
         """Polls until done() or the radio's clock passes deadline; True if done()."""
@@ -581,6 +682,31 @@ class Swarm:
             self.tracker.note(
                 f"{where}: particle {rename.old_id}'s record is now particle {rename.new_id}'s"
             )
+
+
+class _StatusRecorder(Listener):
+    """Every STATUS from the particles of ids received after since, in order (sample())."""
+
+    def __init__(self, ids: set[int], since: float) -> None:
+        self.ids = ids
+        self.since = since
+        self._lock = threading.Lock()
+        self._reports: dict[int, list[Status]] = {}
+
+    def on_frame(self, received: ReceivedFrame) -> None:
+        message = received.frame.message
+        sender = received.frame.sender
+        if isinstance(message, Status) and sender in self.ids and received.time > self.since:
+            with self._lock:
+                self._reports.setdefault(sender, []).append(message)
+
+    def counts(self) -> dict[int, int]:
+        with self._lock:
+            return {particle: len(reports) for particle, reports in self._reports.items()}
+
+    def reports(self) -> dict[int, list[Status]]:
+        with self._lock:
+            return {particle: list(reports) for particle, reports in self._reports.items()}
 
 
 def _move_record(fleet: Fleet, rename: Rename) -> bool:

@@ -22,9 +22,11 @@ from particlebot.protocol import (
     ParamResult,
     ParamValue,
     Ping,
+    ServoHold,
     SetId,
     SetParam,
     Start,
+    State,
     Status,
     Stop,
 )
@@ -81,6 +83,8 @@ DISCOVERY_PING_S = 1.0
 # PINGs per round: their STATUS replies (52 bytes each) arrive together and queue in the base
 # radio's serial buffer, which 9600 baud drains at one reply per ~55 ms.
 MAX_PINGS = 4
+SERVO_HOLD_TIMEOUT_S = 3.0
+"""A SERVO_HOLD sent by id is answered at once with a STATUS; resent every 0.3 s meanwhile."""
 RENAME_WINDOW_S = 30.0
 """How long after a SET_ID its new id answering counts as the renamed particle."""
 RENAME_SLACK_S = 1.0
@@ -645,6 +649,43 @@ class SwarmTracker(Listener):
                     needs_command=needs_command,
                     required=self.required_count,
                     hold_until=self.grace_until,
+                )
+            )
+
+    def servo_hold(self, target: int, pulse_us: int, hold_s: int) -> Campaign:
+        """SERVO_HOLD to one particle until its STATUS shows it holding pulse_us (hold_s > 0)
+        or no longer holding (hold_s = 0), or SERVO_HOLD_TIMEOUT_S pass. A particle that is
+        running answers with its unchanged state: the campaign fails, saying which."""
+        with self._lock:
+            self._cancel("SERVO_HOLD")
+
+            def confirms(key: str, since: float) -> bool:
+                row = self.particles.get(key)
+                if row is None or not _fresh(row, since) or row.status is None:
+                    return False
+                holding = row.status.state == State.HOLDING
+                if hold_s == 0:
+                    return not holding
+                return holding and row.status.servo_pulse_us == pulse_us
+
+            def needs_command(key: str, since: float) -> bool:
+                return not confirms(key, since)
+
+            now = self.clock()
+            return self._launch(
+                Campaign(
+                    name="SERVO_HOLD",
+                    command=ServoHold(target=target, pulse_us=pulse_us, hold_s=hold_s),
+                    started=now,
+                    burst=(0.0,),
+                    interval=0.3,
+                    deadline=now + SERVO_HOLD_TIMEOUT_S,
+                    pending={
+                        row.key for row in self.particles.values() if row.id == target and row.heard
+                    },
+                    confirms=confirms,
+                    needs_command=needs_command,
+                    join_new=False,
                 )
             )
 

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.virtual.photocells import Photocells
+
 ADC_FULL_SCALE = 1023
 SENSOR_COUNT = 6
 LOAD_OHM = 1.5e6  # R_R of SI section S3
@@ -33,7 +35,9 @@ class LightField:
     1.5 MOhm load reads V_n = 1023 R_R / (R_n + R_R) (eq. 11). R_x follows from the calibration
     point (eq. 13). The six cells face outwards 60 degrees apart; the one facing the lamp gets
     `direction_gain` more light (scaled by how sideways the light comes), so they differ a
-    little, as real ones do, while directly under the lamp they agree.
+    little, as real ones do, while directly under the lamp they agree. `photocells` gives each
+    particle's cells a gamma and a resistance of their own (particlebot.virtual.photocells);
+    without it every cell is the ideal one.
     """
 
     def __init__(
@@ -46,6 +50,7 @@ class LightField:
         direction_gain: float = 0.02,
         noise: float = 0.0,
         seed: int = 0,
+        photocells: Photocells | None = None,
     ) -> None:
         if not 0 < ref_value < ADC_FULL_SCALE:
             raise ValueError("ref_value must be inside 1..1022")
@@ -55,6 +60,7 @@ class LightField:
         self.load_ohm = load_ohm
         self.direction_gain = direction_gain
         self.noise = noise
+        self.photocells = photocells
         self.ref_resistance = (ADC_FULL_SCALE - ref_value) * load_ohm / ref_value  # eq. 13
         self._rng = np.random.default_rng(seed)
 
@@ -66,18 +72,24 @@ class LightField:
         """V_n of eq. 11 for an ideal cell at (x, y), before rounding."""
         return float(self._divider(self._resistance(self.distance(x, y))))
 
-    def sensor_values(self, x: float, y: float, heading: float = 0.0) -> list[int]:
-        """Six 10-bit ADC readings (A0..A5) at (x, y); sensor k faces heading + k * 60 deg."""
-        values = self.sensor_matrix(np.array([x]), np.array([y]), heading)[0]
-        return [int(v) for v in values]
+    def sensor_values(
+        self, x: float, y: float, heading: float = 0.0, *, particle: int = 0
+    ) -> list[int]:
+        """Six 10-bit ADC readings (A0..A5) at (x, y); sensor k faces heading + k * 60 deg.
+        particle: whose photocells read them (the swarm's index; matters with `photocells`)."""
+        values = self.sensor_matrix(np.array([x]), np.array([y]), heading, particles=[particle])
+        return [int(v) for v in values[0]]
 
     def sensor_matrix(
         self,
         xs: npt.NDArray[np.float64],
         ys: npt.NDArray[np.float64],
         heading: float = 0.0,
+        *,
+        particles: npt.ArrayLike | None = None,
     ) -> npt.NDArray[np.int64]:
-        """Readings for many particles at once: shape (len(xs), 6)."""
+        """Readings for many particles at once: shape (len(xs), 6). particles: the swarm's
+        index of each (default 0, 1, ...), whose photocells read them."""
         dx = np.asarray(xs, dtype=float) - self.lamp.x
         dy = np.asarray(ys, dtype=float) - self.lamp.y
         ground = np.hypot(dx, dy)
@@ -87,7 +99,12 @@ class LightField:
         angles = heading + np.arange(SENSOR_COUNT) * (2 * math.pi / SENSOR_COUNT)
         facing = np.cos(angles[None, :] - bearing[:, None])
         gain = 1.0 + self.direction_gain * sideways[:, None] * facing
-        resistance = self._resistance(r)[:, None] / gain
+        if self.photocells is None:
+            resistance = self._resistance(r)[:, None] / gain
+        else:
+            rows = np.arange(len(r)) if particles is None else particles
+            darkness = (r / self.ref_distance)[:, None] ** 2 / gain
+            resistance = self.ref_resistance * self.photocells.relative_resistance(rows, darkness)
         values = self._divider(resistance)
         if self.noise > 0:
             values = values + self._rng.normal(0.0, self.noise, values.shape)

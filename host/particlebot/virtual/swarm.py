@@ -14,6 +14,7 @@ from particlebot.pacing import Paced, PacedRunner
 from particlebot.protocol import BASE_STATION_ID, UNASSIGNED_ID, SetId, encode_frame
 from particlebot.virtual.air import VirtualAir
 from particlebot.virtual.light import Lamp, LightField
+from particlebot.virtual.photocells import Photocells
 
 STEP_MS = 5  # the C API wants a tick at least every 5 ms for 20 ms servo steps
 STEP_S = STEP_MS / 1000
@@ -69,6 +70,8 @@ class SwarmConfig:
     seed: int = 1
     noise: float = 0.0
     first_id: int = 1
+    photocell_spread: float = 0.0
+    """0: every photocell the ideal one; s: gamma within 1 +- s and so on (Photocells.spread)."""
 
 
 @dataclass(frozen=True)
@@ -111,7 +114,10 @@ class VirtualSwarm(Paced):
         if config.first_id + config.count - 1 > 253:
             raise ValueError("particle ids must stay within 1..253")
         self.config = config
-        self.light = LightField(config.lamp, noise=config.noise, seed=config.seed)
+        cells = None
+        if config.photocell_spread:
+            cells = Photocells.spread(config.count, config.photocell_spread, config.seed)
+        self.light = LightField(config.lamp, noise=config.noise, seed=config.seed, photocells=cells)
         self.air = VirtualAir()
         self.t = 0.0
         self.steps = 0
@@ -230,11 +236,21 @@ class VirtualSwarm(Paced):
         if not moved:
             return
         values = self.light.sensor_matrix(
-            np.array([m.x for m in moved]), np.array([m.y for m in moved])
+            np.array([m.x for m in moved]),
+            np.array([m.y for m in moved]),
+            particles=[m.index for m in moved],
         )
         for member, row in zip(moved, values, strict=True):
             member.firmware.set_adc([int(v) for v in row])
             member.adc_x = member.x
+
+    def move(self, index: int, x: float, y: float) -> None:
+        """Puts particle index at (x, y) (as a person would); its photocells see the new light
+        from now on. Call it from the thread that steps the swarm, or while none does."""
+        member = self.members[index]
+        member.x, member.y = x, y
+        self._update_light(force=True)
+        self._take_snapshot()
 
     def _take_snapshot(self) -> None:
         lamp = self.config.lamp

@@ -369,6 +369,24 @@ def test_the_messages_pane_takes_the_room_the_table_leaves() -> None:
     run_app(test, size=(200, 50))
 
 
+def test_messages_are_wrapped_again_when_the_terminal_narrows() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.pause()
+        messages = app.query_one(RichLog)
+        assert len(messages.lines) == 1  # the welcome, on one line of 200 columns
+        await pilot.resize_terminal(80, 24)
+        await pilot.pause()
+        assert len(messages.lines) == 3
+        assert messages.max_scroll_x == 0  # nothing cut at the edge, nothing to scroll to
+        assert "q quit." in log_text(app).replace("\n", " ")
+        await pilot.resize_terminal(200, 50)
+        await pilot.pause()
+        assert len(messages.lines) == 1
+
+    run_app(test, size=(200, 50))
+
+
 def test_seconds_since_heard_fit_their_column_however_long() -> None:
     assert [heard_text(s) for s in (0.04, 99.94, 1234.5, 10**7)] == [
         "0.0s", "99.9s", "1234s", "99999s",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
@@ -73,6 +74,8 @@ CELL_PADDING = 2
 BELOW_TABLE = 1 + 8 + 1 + 1
 # Above it: the status bar.
 ABOVE_TABLE = 2
+# Messages kept for the pane (the session log keeps them all).
+MESSAGES_KEPT = 1000
 
 # How often the swarm's campaigns are advanced: a STOP copy goes out at most this late, and the
 # last of the burst must leave within ~0.35 s of the command for every servo to be contracted
@@ -279,6 +282,33 @@ class PageScreen(ModalScreen[None]):
         self.dismiss(None)
 
 
+class MessageLog(RichLog):
+    """The messages pane. RichLog wraps a line once, at the width it has then; this one keeps
+    its messages and wraps them again whenever its width changes, so that a terminal made
+    narrower shows them whole rather than cut at its edge."""
+
+    def __init__(self, *, id: str) -> None:
+        super().__init__(id=id, wrap=True, markup=False, max_lines=MESSAGES_KEPT)
+        self.messages: deque[Text] = deque(maxlen=MESSAGES_KEPT)
+        self._wrapped_at = 0
+        """The content width the lines shown were wrapped at; 0 before the first layout."""
+
+    def add(self, message: Text) -> None:
+        self.messages.append(message)
+        if self._wrapped_at:  # else written at the first layout
+            self.write(message, width=self._wrapped_at)
+
+    def on_resize(self, event: events.Resize) -> None:
+        width = self.scrollable_content_region.width
+        if width and width != self._wrapped_at:
+            # At the first layout RichLog holds these writes back until its own handler, which
+            # runs after this one; the width they carry is the one the pane has.
+            self._wrapped_at = width
+            self.clear()
+            for message in self.messages:
+                self.write(message, width=width)
+
+
 class CommandLine(Input):
     """The command line; while it has the keys, the footer says how to leave it."""
 
@@ -305,7 +335,10 @@ class ConsoleApp(App[int]):
         height: 2; padding: 0 1; background: $boost; text-wrap: nowrap; text-overflow: ellipsis;
     }
     #table { height: auto; overflow-x: hidden; }
-    #messages { height: 1fr; min-height: 9; border-top: solid $primary; }
+    #messages {
+        height: 1fr; min-height: 9; border-top: solid $primary;
+        overflow-x: hidden; scrollbar-gutter: stable;
+    }
     #command { height: 1; border: none; padding: 0 1; }
     #command:focus { background: $boost; }
     """
@@ -359,7 +392,7 @@ class ConsoleApp(App[int]):
     def compose(self) -> ComposeResult:
         yield Static(id="status")
         yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
-        yield RichLog(id="messages", wrap=True, markup=False)
+        yield MessageLog(id="messages")
         # Not select_on_focus: a prefilled command is completed, not typed over.
         yield CommandLine(
             placeholder="command (Enter sends, Esc goes back to the table; 'help' lists them)",
@@ -373,7 +406,7 @@ class ConsoleApp(App[int]):
     def on_mount(self) -> None:
         self.query_one("#table", DataTable).focus()
         welcome = REPLAY_WELCOME if self.read_only else WELCOME
-        self.query_one("#messages", RichLog).write(Text(welcome, style="bold"))
+        self._write(welcome, "bold")
         self._fit_columns(self.size.width)
         self._fit_table(self.size.height)
         self.refresh_view()
@@ -504,17 +537,14 @@ class ConsoleApp(App[int]):
         if added:
             # Particles are heard in any order; a person looks them up by id.
             table.sort("id", key=_id_order)
-        log = self.query_one("#messages", RichLog)
         for note in model.new_notes():
-            style = {"error": "bold red", "warning": "yellow"}.get(note.level, "")
-            log.write(Text(note.text, style=style))
+            self._write(note.text, {"error": "bold red", "warning": "yellow"}.get(note.level, ""))
 
     # ---- actions ---------------------------------------------------------------------------
 
     def _write(self, text: str | Text, style: str = "") -> None:
-        self.query_one("#messages", RichLog).write(
-            text if isinstance(text, Text) else Text(text, style=style)
-        )
+        message = text if isinstance(text, Text) else Text(text, style=style)
+        self.query_one("#messages", MessageLog).add(message)
 
     def _prefill(self, text: str, hint: str | None = None) -> None:
         if hint is not None:

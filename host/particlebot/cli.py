@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
@@ -86,9 +88,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# What writing to a closed pipe or a full or failing disk behind `>` raises. Such an error has no
+# file name; one with a name is about a file a command opened itself, which it reports itself.
+STDOUT_ERRNOS = frozenset({errno.EPIPE, errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return command_module(args.command).run(args)
+    try:
+        return command_module(args.command).run(args)
+    except OSError as exc:
+        if exc.errno not in STDOUT_ERRNOS or exc.filename is not None:
+            raise
+        # Python would flush what is left in stdout's buffer again at exit and fail again, with
+        # a traceback of its own: it goes nowhere instead.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        if exc.errno == errno.EPIPE:
+            return 0  # the reader took what it wanted and left (`| head`), as with any filter
+        print(f"particlebot: cannot write the output: {exc.strerror}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

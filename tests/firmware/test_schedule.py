@@ -107,6 +107,22 @@ def test_a_cycle_follows_eq_4_each_step_and_repeats_after_t_p(
     assert list(trace.values()).count(peak) >= STEP_MS  # each step's radius is held for 20 ms
 
 
+def test_a_start_that_leaves_cycle_and_interval_out_keeps_the_stored_ones(bench: Bench) -> None:
+    # The console's `s` then Enter sends 0 for both: `set cycle_steps 76` must still hold.
+    assert bench.set_param(Param.CYCLE_STEPS, 76).result == ParamResult.OK
+    assert bench.set_param(Param.UPDATE_INTERVAL_S, 10).result == ParamResult.OK
+    assert bench.set_param(Param.ROUND_MS, 200).result == ParamResult.OK
+    t0 = start(bench, cycle_steps=0, wave_size=1, update_interval_s=0)
+    trace = radii(bench, 12_000)
+    first, second = expansion_starts(trace)[:2]
+    assert second - first == 76 * STEP_MS  # T of the stored 76 steps (N = 1: no pause)
+    # The stored 10 s interval: the next epoch's estimation round begins at t0 + 10 s, and every
+    # particle is contracted for it.
+    epoch_end = t0 + 10_000
+    assert all(trace[t] == R_MIN for t in range(epoch_end, epoch_end + 200))
+    assert any(trace[t] > R_MIN for t in range(epoch_end - 2 * 76 * STEP_MS, epoch_end))
+
+
 def test_servo_pulses_rise_with_the_radius_within_500_to_2500_us(bench: Bench) -> None:
     assert bench.set_param(Param.ROUND_MS, 200).result == ParamResult.OK
     start(bench, cycle_steps=76, wave_size=1)  # an even count of steps reaches R_max exactly

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -25,7 +26,7 @@ def assert_one_line_failure(
     except SystemExit as exc:  # argparse ends the process itself
         code = exc.code if isinstance(exc.code, int) else 1
     err = capsys.readouterr().err
-    assert code != 0
+    assert code == 2
     assert "Traceback" not in err
     assert len(err.strip().splitlines()) == 1, err
     assert complaint in err
@@ -75,6 +76,15 @@ def test_a_log_folder_that_cannot_be_written_is_one_line(
     argv = [command, "--log-dir", str(a_file / "logs")]
     argv += ["--no-ui"] if command == "demo" else ["--radio", "virtual://2"]
     assert_one_line_failure(argv, "cannot write the session log", capsys)
+
+
+@pytest.mark.parametrize("log_dir", ["", "logs"], ids=["is the file", "under the file"])
+def test_a_file_where_the_log_folder_belongs_is_named(
+    log_dir: str, a_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Not "File exists" or "Not a directory", which name neither the file nor what to do.
+    argv = ["log", "--radio", "virtual://2", "--log-dir", str(a_file / log_dir)]
+    assert_one_line_failure(argv, f"({a_file} is a file); give --log-dir a folder", capsys)
 
 
 @NOT_ROOT
@@ -198,6 +208,7 @@ def test_a_log_without_records_is_an_error(
         (["log", "--radio", "serial:///dev/null?baud=0"], "baud must be a whole number > 0"),
         (["export", "x.jsonl", "--type", "STATUSS"], "--type: no message type 'STATUSS'"),
         (["console", "--radio", "virtual://2"], "the console needs a terminal"),
+        (["log"], "say which radio to record: --radio URL (see particlebot log --help)"),
         ([], "the following arguments are required: COMMAND"),
     ],
 )
@@ -215,3 +226,14 @@ def test_a_backend_that_cannot_be_imported_is_one_line(
     assert_one_line_failure(
         ["log", "--radio", "xbee:///dev/ttyUSB0"], "The xbee:// backend cannot be loaded", capsys
     )
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs Linux's /dev/full")
+@pytest.mark.parametrize("command", [["export", "-o", "-"], ["replay", "--no-ui"]])
+def test_output_to_a_full_disk_is_one_line(command: list[str], tmp_path: Path) -> None:
+    log = write_log(tmp_path / "x.jsonl", SESSION, GOOD_RX, GOOD_FRAME)
+    argv = [sys.executable, "-m", "particlebot.cli", command[0], str(log), *command[1:]]
+    with open("/dev/full", "w") as full:  # every write fails: No space left on device
+        done = subprocess.run(argv, stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr == "particlebot: cannot write the output: No space left on device\n"

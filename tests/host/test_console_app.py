@@ -6,12 +6,13 @@ import asyncio
 from collections.abc import Callable, Coroutine
 from typing import Any
 
+from textual import events
 from textual.geometry import Region
 from textual.pilot import Pilot
 from textual.widget import Widget
 from textual.widgets import DataTable, Input, RichLog, Static
 
-from particlebot.console.app import ConfirmScreen, ConsoleApp
+from particlebot.console.app import ConfirmScreen, ConsoleApp, PageScreen, heard_text
 from particlebot.fleet import Fleet, ParticleRecord
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
 from particlebot.swarm.api import Swarm
@@ -88,6 +89,24 @@ async def footer_text(pilot: Pilot[int]) -> str:
 
 def log_text(app: ConsoleApp) -> str:
     return "\n".join(str(line.text) for line in app.query_one(RichLog).lines)
+
+
+async def burst(pilot: Pilot[int], *keys: str) -> None:
+    """Keys that arrive together, as when typed fast, pasted or sent by tmux: each is queued
+    before the app has handled the one before it (pilot.press waits after every key)."""
+    driver = pilot.app._driver
+    assert driver is not None
+    for key in keys:
+        event = events.Key(key, key if len(key) == 1 else None)
+        event.set_sender(pilot.app)
+        driver.send_message(event)
+    await pilot.pause()
+
+
+def page_lines(app: ConsoleApp) -> list[str]:
+    """What the open page shows on screen, line by line."""
+    assert isinstance(app.screen, PageScreen)
+    return screen_lines(app.screen.query_one("#page-body"))
 
 
 def test_every_particle_heard_appears_in_the_table_with_its_s_n() -> None:
@@ -209,9 +228,85 @@ def test_the_keys_are_explained_on_screen() -> None:
         for hint in ("s start", "x STOP", "p set parameter", "i identify", "d set id", "q quit"):
             assert hint in text
         await pilot.press("question_mark")
-        assert "setid ID NEW_ID" in log_text(app)
+        await pilot.pause()
+        shown = "\n".join(page_lines(app))
+        assert "Keys" in shown and "STOP every particle" in shown
+        assert "start [A|B|C|D]" in shown  # the commands follow the keys
+        await pilot.press("escape")
+        assert not isinstance(app.screen, PageScreen)
 
     run_app(test)
+
+
+def test_at_80_by_24_help_and_params_open_a_page_that_reads_at_that_width() -> None:
+    # In the 8-line messages pane the help showed its last four commands, each summary squeezed
+    # into the columns left beside the longest usage.
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.press("question_mark")
+        await pilot.pause()
+        lines = page_lines(app)
+        assert len(lines) >= 18
+        assert all(len(line.rstrip()) <= 76 for line in lines)  # inside the page's frame
+        start = next(i for i, line in enumerate(lines) if line.startswith("s "))
+        # A long explanation wraps under itself, not under the key.
+        assert lines[start + 1].startswith(" " * 5) and lines[start + 1].strip()
+        await pilot.press("down", "pagedown")  # it scrolls to the commands at the end
+        assert app.screen.query_one("#page-text").scroll_y > 0
+        await pilot.press("q")  # q closes the page; it does not quit
+        assert app.is_running and not isinstance(app.screen, PageScreen)
+        await pilot.press("colon", *"params", "enter")
+        await pilot.pause()
+        assert "cycle_steps (1)" in "\n".join(page_lines(app))
+        assert radio.sent == []
+
+    run_app(test, size=(80, 24))
+
+
+def test_a_replays_help_leaves_out_the_keys_that_send() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.press("question_mark")
+        await pilot.pause()
+        keys = {line.split()[0] for line in page_lines(app) if line[:1] not in (" ", "")}
+        assert {"?", "q", ":"} <= keys
+        assert not keys & {"s", "x", "p", "i", "d"}
+
+    run_app(test, read_only=True)
+
+
+def test_keys_typed_fast_after_s_or_colon_land_in_the_command_line() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app, state=int(State.IDLE))
+        command = app.query_one(Input)
+        await burst(pilot, "s", "A")
+        assert command.value == "start A"  # not the A lost on the table
+        await pilot.press("escape")
+        command.value = ""
+        await burst(pilot, "colon", *"ping 2", "enter")
+        assert wait_until(lambda: len(radio.sent) == 1)
+        assert radio.sent_frames()[0].type_name == "PING"
+        await burst(pilot, "s", "enter")
+        assert wait_until(lambda: len(radio.sent) >= 2)
+        assert isinstance(radio.sent_frames()[1].message, Start)
+
+    run_app(test)
+
+
+def test_in_the_command_line_the_keys_are_letters_and_the_footer_says_how_to_leave() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.press("colon", *"pids: ?")
+        assert app.query_one(Input).value == "pids: ?"
+        assert not isinstance(app.screen, PageScreen)
+        footer = await footer_text(pilot)
+        assert "Send" in footer and "Back" in footer
+        await pilot.press("escape")
+        assert app.query_one(DataTable).has_focus
+        assert "Start" in await footer_text(pilot)
+
+    run_app(test, size=(80, 24))
 
 
 # ---- a small terminal ---------------------------------------------------------------------------
@@ -234,6 +329,68 @@ def test_at_80_by_24_every_row_of_ten_the_counters_and_the_keys_show() -> None:
         assert sum(c.get_render_width(table) for c in table.ordered_columns) <= 80
 
     run_app(test, size=(80, 24))
+
+
+def test_at_80_by_24_long_flags_end_in_an_ellipsis_and_the_table_never_scrolls_sideways() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        # A horizontal scrollbar took the tenth row, and "RESET in run 2" did not fit.
+        app = console(pilot)
+        hear_particles(radio, app, ids=range(1, 11), run_id=2, uptime_ms=50_000)
+        radio.inject(status_frame(3, state=int(State.IDLE), resets=2, last_reset_cause=0x04))
+        again = {"state": int(State.CYCLING), "run_id": 2, "uptime_ms": 50_500}
+        radio.inject(status_frame(4, definition_hash=0x1234, sensor_faults=0b101, **again))
+        assert wait_until(lambda: app.model.rows()[2].reset_in_run == 2)
+        radio.clock.advance(8)  # and all of them silent: one more flag each
+        await refreshed(pilot)
+        table = app.query_one(DataTable)
+        assert table.max_scroll_x == 0 and table.max_scroll_y == 0
+        flags = [row["flags"] for row in table_text(app)]
+        assert flags[2].startswith("RESET in run 2 ") and flags[2].endswith("…")
+        assert flags[3].startswith("SILENT 8s HASH") and flags[3].endswith("…")
+        width = table.ordered_columns[-1].get_render_width(table)
+        assert all(len(text) <= width - 2 for text in flags)
+
+    run_app(test, size=(80, 24))
+
+
+def test_the_messages_pane_takes_the_room_the_table_leaves() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await refreshed(pilot)
+        table, messages = app.query_one(DataTable), app.query_one(RichLog)
+        assert table.size.height == 4  # the header and three particles
+        assert messages.size.height > 30  # of 50 rows
+        hear_particles(radio, app, ids=range(1, 60))
+        await refreshed(pilot)
+        assert messages.size.height == 8  # at least its 8 lines, and the table scrolls
+        assert table.max_scroll_y > 0
+
+    run_app(test, size=(200, 50))
+
+
+def test_messages_are_wrapped_again_when_the_terminal_narrows() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        await pilot.pause()
+        messages = app.query_one(RichLog)
+        assert len(messages.lines) == 1  # the welcome, on one line of 200 columns
+        await pilot.resize_terminal(80, 24)
+        await pilot.pause()
+        assert len(messages.lines) == 3
+        assert messages.max_scroll_x == 0  # nothing cut at the edge, nothing to scroll to
+        assert "q quit." in log_text(app).replace("\n", " ")
+        await pilot.resize_terminal(200, 50)
+        await pilot.pause()
+        assert len(messages.lines) == 1
+
+    run_app(test, size=(200, 50))
+
+
+def test_seconds_since_heard_fit_their_column_however_long() -> None:
+    assert [heard_text(s) for s in (0.04, 99.94, 1234.5, 10**7)] == [
+        "0.0s", "99.9s", "1234s", "99999s",
+    ]  # fmt: skip
 
 
 def test_at_80_by_24_a_bigger_swarm_scrolls_and_says_how_big_it_is() -> None:

@@ -297,3 +297,40 @@ def test_replay_without_the_console_shows_its_progress(
     assert main(["replay", str(log), "--no-ui", "--speed", "8"]) == 0  # half a second
     progress = [line for line in capsys.readouterr().out.splitlines() if " of 4.0 s" in line]
     assert progress and progress[0].strip().endswith("of 4.0 s")
+
+
+def test_a_finished_replay_stops_its_clock_where_the_session_ended(tmp_path: Path) -> None:
+    # Run on, every particle turned SILENT in the console once the log had played out.
+    clock = ManualClock(start=1000.0)
+    path = tmp_path / "short.jsonl"
+    writer = JsonlWriter(path, clock=clock)
+    for k in range(3):
+        writer.on_packet(Packet(status_frame(1, seq=k), None, clock()))
+        clock.advance(1.0)
+    clock.advance(2.0)  # the session went on quietly for 2 s more: that silence is the log's
+    writer.on_close()
+    radio = ReplayRadio(path, speed=1000.0)  # 5 s of log in 5 ms
+    while radio.receive(timeout=1.0) is not None:
+        pass
+    assert radio.finished
+    assert wait_until(lambda: radio.now() == 1005.0)
+    assert radio.now() == 1005.0
+    radio.close()
+
+
+def test_replay_without_the_console_lists_resets_and_flags(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    clock = ManualClock(start=1000.0)
+    path = tmp_path / "reset.jsonl"
+    writer = JsonlWriter(path, clock=clock)
+    running = {"state": int(State.CYCLING), "run_id": 4}
+    for k, (uptime, fields) in enumerate([(50_000, running), (51_000, running), (300, {})]):
+        writer.on_packet(Packet(status_frame(2, seq=k, uptime_ms=uptime, **fields), None, clock()))
+        clock.advance(1.0)
+    last = status_frame(2, seq=3, uptime_ms=1300, resets=2, last_reset_cause=0x04)
+    writer.on_packet(Packet(last, None, clock()))
+    writer.on_close()
+    assert main(["replay", str(path), "--no-ui"]) == 0
+    (line,) = [line for line in capsys.readouterr().out.splitlines() if "particle   2" in line]
+    assert line.endswith("resets 2 (brown-out)  RESET in run 4")

@@ -370,16 +370,42 @@ def test_stop_cancels_a_start_still_being_resent(
     assert "Start" not in sink.types()[1:]
 
 
+# A SET of SERVO_CAL_3 refused with 1285 still in force: the value asked was inside the
+# parameter's range, but the nine-point table would no longer rise.
+NOT_MONOTONIC = ParamValue(
+    param=int(Param.SERVO_CAL_3), result=int(ParamResult.SERVO_TABLE_NOT_MONOTONIC), value=1285
+)
+
+
 def test_param_values_are_shown_as_notes(model: SwarmTracker, clock: ManualClock) -> None:
     reply = ParamValue(param=int(Param.CYCLE_STEPS), result=int(ParamResult.BUSY), value=150)
     hear(model, clock, encode_frame(reply, 3, 0))
-    assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (BUSY)"
-    # A value inside the range that would make the servo table non-monotonic says so.
-    refused = ParamValue(
-        param=int(Param.SERVO_CAL_3), result=int(ParamResult.SERVO_TABLE_NOT_MONOTONIC), value=1285
+    assert model.notes[-1].text == "Particle 3: CYCLE_STEPS = 150 (BUSY: STOP them first)"
+    hear(model, clock, encode_frame(NOT_MONOTONIC, 3, 1))
+    assert model.notes[-1].text == (
+        "Particle 3: SERVO_CAL_3 = 1285 (SERVO_TABLE_NOT_MONOTONIC: SERVO_CAL_0..8 must keep "
+        "rising (or falling) from point to point: change the neighbouring points first)"
     )
-    hear(model, clock, encode_frame(refused, 3, 1))
-    assert model.notes[-1].text == "Particle 3: SERVO_CAL_3 = 1285 (SERVO_TABLE_NOT_MONOTONIC)"
+
+
+def test_a_refused_set_says_why_what_to_do_and_what_stays(
+    model: SwarmTracker, clock: ManualClock
+) -> None:
+    # 2000 is inside SERVO_CAL_3's 500..2500: the table it would make is what is wrong.
+    hear_all(model, clock, range(1, 4), State.IDLE)
+    model.set_param(Param.SERVO_CAL_3, 2000, 2)
+    hear(model, clock, encode_frame(NOT_MONOTONIC, 2, 1))
+    assert model.notes[-1].text == (
+        "Particle 2: SET SERVO_CAL_3 = 2000 refused, SERVO_TABLE_NOT_MONOTONIC: SERVO_CAL_0..8 "
+        "must keep rising (or falling) from point to point: change the neighbouring points "
+        "first; it stays 1285"
+    )
+    model.set_param(Param.SERVO_CAL_3, 2000)
+    for particle in range(1, 4):
+        hear(model, clock, encode_frame(NOT_MONOTONIC, particle, 2))
+    assert model.notes[-1].text.startswith(
+        "SET SERVO_CAL_3 = 2000: 0/3 OK; SERVO_TABLE_NOT_MONOTONIC: 1-3 (SERVO_CAL_0..8 must keep"
+    )
 
 
 # ---- answers to SET_PARAM and GET_PARAM --------------------------------------------------------

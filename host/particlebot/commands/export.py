@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -28,10 +27,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     log = Path(args.log)
     types = args.type or None
-    try:
-        if args.output == "-":
+    if args.output == "-":
+        try:
             return _to_stdout(log, types, args.notes)
-        output = Path(args.output) if args.output else log.with_suffix(".csv")
+        except LogError as exc:
+            return fail(str(exc))
+    output = Path(args.output) if args.output else log.with_suffix(".csv")
+    try:
         rows = export_csv_file(log, output, types, notes=args.notes)
     except LogError as exc:
         return fail(str(exc))
@@ -42,11 +44,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _to_stdout(log: Path, types: list[str] | None, notes: bool) -> int:
-    try:
-        export_csv(log, sys.stdout, types, notes=notes)
-        sys.stdout.flush()
-    except BrokenPipeError:
-        # The reader took what it wanted and left (`| head`): end quietly, like any Unix filter.
-        # Python would flush stdout again at exit and complain: point it at /dev/null first.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    # A reader that leaves early (`| head`) or a full disk behind `>` is cli.main's business.
+    export_csv(log, sys.stdout, types, notes=notes)
+    sys.stdout.flush()
     return 0

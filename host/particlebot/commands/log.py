@@ -19,7 +19,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if not args.radio:
-        return fail("say which radio to record: --radio URL (see particlebot console --help)")
+        return fail("say which radio to record: --radio URL (see particlebot log --help)")
     try:
         with (
             sigterm_as_interrupt(),

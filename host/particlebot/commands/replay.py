@@ -11,6 +11,7 @@ from particlebot.logs.jsonl import LogError
 from particlebot.logs.replay import ReplayRadio
 from particlebot.options import SPEED, float_arg
 from particlebot.radio import RadioError
+from particlebot.resets import reset_cause
 from particlebot.swarm.campaigns import state_name
 
 PROGRESS_EVERY_S = 2.0
@@ -82,10 +83,15 @@ def run(args: argparse.Namespace) -> int:
         swarm.session.close()
         print(f"Replayed {radio.total_packets} packets from {args.log}")
         print(swarm.tracker.counters_text())
-        for row in swarm.tracker.rows():
+        tracker = swarm.tracker
+        for row in tracker.rows():
             status = row.status
-            print(
+            line = (
                 f"particle {row.id:>3}  state {state_name(status.state) if status else '?':<11}"
                 f"  S_n {status.s_n if status else '-':>3}  intensity {row.intensity}"
             )
+            if status is not None:
+                line += f"  resets {status.resets} ({reset_cause(status.last_reset_cause)})"
+            flags = row.flags(tracker.clock(), tracker.silent_after, tracker.host_hash)
+            print(line + "".join(f"  {flag}" for flag in flags))
         return 0

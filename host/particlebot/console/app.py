@@ -4,20 +4,30 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
+from rich.console import Group, RenderableType
+from rich.padding import Padding
+from rich.table import Table
 from rich.text import Text
 from textual import events
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Vertical
+from textual.containers import Vertical, VerticalScroll
 from textual.css.query import NoMatches
 from textual.screen import ModalScreen
 from textual.widgets import DataTable, Footer, Input, RichLog, Static
 
-from particlebot.console.commands import COMMANDS, CommandError, Prepared, help_text, prepare
+from particlebot.console.commands import (
+    COMMANDS,
+    CommandError,
+    Prepared,
+    params_entries,
+    prepare,
+)
 from particlebot.protocol import UNASSIGNED_ID
 from particlebot.radio import LinkState, RadioError
 from particlebot.resets import reset_cause
@@ -52,10 +62,20 @@ COLUMNS = [
     Column("bad", "BAD RX", 8, drop_order=1),
     Column("resets", "RESETS", 13, drop_order=1),
     Column("heard", "HEARD", 8),
-    Column("flags", "FLAGS", 14),
+    Column("flags", "FLAGS", 19),
 ]
+"""FLAGS takes whatever width the others leave, at least room for "RESET in run 255"; a longer
+list of flags (most urgent first) ends in an ellipsis rather than scroll the table sideways."""
 # The table's vertical scrollbar.
 SCROLLBAR = 2
+# DataTable's padding: one cell either side of each column's content.
+CELL_PADDING = 2
+# Under the table: the messages pane's border and 8 lines (at least), the command line, the keys.
+BELOW_TABLE = 1 + 8 + 1 + 1
+# Above it: the status bar.
+ABOVE_TABLE = 2
+# Messages kept for the pane (the session log keeps them all).
+MESSAGES_KEPT = 1000
 
 # How often the swarm's campaigns are advanced: a STOP copy goes out at most this late, and the
 # last of the burst must leave within ~0.35 s of the command for every servo to be contracted
@@ -75,7 +95,25 @@ START_HINT = (
     "particle's stored setting."
 )
 SET_HINT = f"{COMMANDS['set'].usage}: stored in each particle's EEPROM; 'params' lists them."
+KEYS_HELP = [
+    (
+        "s",
+        "start a run: the command line shows 'start '; Enter alone starts method D, and "
+        "whatever is left out keeps each particle's stored setting",
+    ),
+    ("x", "STOP every particle, repeated until each one confirms"),
+    ("p", "set a parameter (the command line shows 'set ')"),
+    ("i", "identify: the selected particle wiggles three times"),
+    ("d", "give the selected particle another id"),
+    (":", "the command line: any command below; Enter sends it, Esc goes back to the table"),
+    ("?", "this help"),
+    ("q", "quit (asks first while particles are in a run)"),
+    ("Up Down", "move through the table (PgUp, PgDn: a page) when it has more than fit"),
+]
 SENDING_ACTIONS = frozenset({"start", "stop", "set_param", "identify", "set_id"})
+SENDING_KEYS = frozenset({"s", "x", "p", "i", "d"})
+PROMPTING_ACTIONS = frozenset({"start", "set_param", "identify", "set_id", "command"})
+"""The actions of the keys that open the command line (priority bindings)."""
 
 
 def visible_columns(width: int) -> list[Column]:
@@ -87,6 +125,17 @@ def visible_columns(width: int) -> list[Column]:
             break
         shown.remove(column)
     return shown
+
+
+def flags_width(columns: list[Column], width: int) -> int:
+    """The FLAGS column's content width: what the other columns leave of a screen width wide."""
+    others = sum(c.width for c in columns if c.key != "flags")
+    return max(COLUMNS[-1].width, width - SCROLLBAR - others) - CELL_PADDING
+
+
+def heard_text(age: float) -> str:
+    """Seconds since a particle was last heard, in the HEARD column's six cells."""
+    return f"{age:.1f}s" if age < 100 else f"{min(age, 99999):.0f}s"
 
 
 def _looks(cell: Text) -> tuple[str, str]:
@@ -125,7 +174,9 @@ def row_cells(row: ParticleRow, now: float, tracker: SwarmTracker) -> dict[str, 
         ),
         "bad": Text(str(row.bad_frames) if row.bad_frames is not None else "", style=dim),
         "resets": Text(resets, style="bold red" if row.reset_in_run is not None else dim),
-        "heard": Text(f"{age:.1f}s" if row.heard else "never", style="bold red" if silent else ""),
+        "heard": Text(
+            heard_text(age) if row.heard else "never", style="bold red" if silent else ""
+        ),
         "flags": Text(" ".join(flags), style="bold red" if flags else ""),
     }
     return cells
@@ -170,6 +221,103 @@ class ConfirmScreen(ModalScreen[str]):
         self.dismiss("cancel")
 
 
+def page(*sections: tuple[str, list[tuple[str, str]]]) -> Group:
+    """Sections of (term, explanation) for a PageScreen: short terms (keys) in a column of their
+    own, long ones (a command's usage) on a line above their explanation, so that the text wraps
+    readably at any width."""
+    parts: list[RenderableType] = []
+    for title, entries in sections:
+        parts.append(Text(title, style="bold underline"))
+        if all(len(term) <= 8 for term, _ in entries):
+            grid = Table.grid(padding=(0, 2))
+            grid.add_column(style="bold", no_wrap=True)
+            grid.add_column()
+            for term, text in entries:
+                grid.add_row(term, text)
+            parts.append(grid)
+        else:
+            for term, text in entries:
+                parts += [Text(term, style="bold"), Padding(Text(text), (0, 0, 0, 4))]
+        parts.append(Text(""))
+    return Group(*parts)
+
+
+def help_page(read_only: bool = False) -> Group:
+    """The keys and commands; a replay's leaves out the keys that would send."""
+    keys = [(key, text) for key, text in KEYS_HELP if not (read_only and key in SENDING_KEYS)]
+    commands = [(entry.usage, entry.summary) for entry in COMMANDS.values()]
+    return page(("Keys", keys), ("Commands (type : first)", commands))
+
+
+class PageScreen(ModalScreen[None]):
+    """What is too long for the messages pane (help, params), scrolled on a page of its own."""
+
+    DEFAULT_CSS = """
+    PageScreen { align: center middle; }
+    #page {
+        width: 100%; max-width: 110; height: 100%;
+        border: thick $primary; background: $surface; padding: 0 1;
+    }
+    #page-keys { dock: bottom; height: 1; color: $text-muted; }
+    """
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape,q,question_mark", "close", "Close"),
+    ]
+
+    def __init__(self, content: RenderableType) -> None:
+        super().__init__()
+        self.content = content
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="page"):
+            yield Static("Up/Down, PgUp/PgDn scroll;  Esc, q or ? closes", id="page-keys")
+            with VerticalScroll(id="page-text"):
+                yield Static(self.content, id="page-body")
+
+    def on_mount(self) -> None:
+        # Focused at once, so that the keys that follow (Down, Esc) reach the page.
+        self.set_focus(self.query_one("#page-text", VerticalScroll))
+
+    def action_close(self) -> None:
+        self.dismiss(None)
+
+
+class MessageLog(RichLog):
+    """The messages pane. RichLog wraps a line once, at the width it has then; this one keeps
+    its messages and wraps them again whenever its width changes, so that a terminal made
+    narrower shows them whole rather than cut at its edge."""
+
+    def __init__(self, *, id: str) -> None:
+        super().__init__(id=id, wrap=True, markup=False, max_lines=MESSAGES_KEPT)
+        self.messages: deque[Text] = deque(maxlen=MESSAGES_KEPT)
+        self._wrapped_at = 0
+        """The content width the lines shown were wrapped at; 0 before the first layout."""
+
+    def add(self, message: Text) -> None:
+        self.messages.append(message)
+        if self._wrapped_at:  # else written at the first layout
+            self.write(message, width=self._wrapped_at)
+
+    def on_resize(self, event: events.Resize) -> None:
+        width = self.scrollable_content_region.width
+        if width and width != self._wrapped_at:
+            # At the first layout RichLog holds these writes back until its own handler, which
+            # runs after this one; the width they carry is the one the pane has.
+            self._wrapped_at = width
+            self.clear()
+            for message in self.messages:
+                self.write(message, width=width)
+
+
+class CommandLine(Input):
+    """The command line; while it has the keys, the footer says how to leave it."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("enter", "submit", "Send"),
+        Binding("escape", "app.leave_command", "Back to the table"),
+    ]
+
+
 class ConsoleApp(App[int]):
     """Shows what a Swarm knows and sends its commands. `on_tick` (if given) runs with every
     poll (POLL_S) and ends the app when it returns an exit code. `script` (if given) runs on a
@@ -180,22 +328,30 @@ class ConsoleApp(App[int]):
     TITLE = "particlebot console"
     # The command palette offers nothing here and would take a place in the footer.
     ENABLE_COMMAND_PALETTE = False
+    # The table is as tall as its rows, up to what leaves the messages pane its 8 lines (set in
+    # _fit_table); the pane takes the rest. It never scrolls sideways: FLAGS ends in an ellipsis.
     CSS = """
     #status {
         height: 2; padding: 0 1; background: $boost; text-wrap: nowrap; text-overflow: ellipsis;
     }
-    #table { height: 1fr; }
-    #messages { height: 9; border-top: solid $primary; }
+    #table { height: auto; overflow-x: hidden; }
+    #messages {
+        height: 1fr; min-height: 9; border-top: solid $primary;
+        overflow-x: hidden; scrollbar-gutter: stable;
+    }
     #command { height: 1; border: none; padding: 0 1; }
     #command:focus { background: $boost; }
     """
+    # The keys that open the command line are priority bindings, handled as they arrive: keys
+    # typed right after them (or pasted, or sent by tmux) then reach the command line, not the
+    # table. check_action hands them to the command line while it has the keys.
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("s", "start", "Start"),
+        Binding("s", "start", "Start", priority=True),
         Binding("x", "stop", "STOP"),
-        Binding("p", "set_param", "Set"),
-        Binding("i", "identify", "Identify"),
-        Binding("d", "set_id", "Set id"),
-        Binding("colon", "command", "Command"),
+        Binding("p", "set_param", "Set", priority=True),
+        Binding("i", "identify", "Identify", priority=True),
+        Binding("d", "set_id", "Set id", priority=True),
+        Binding("colon", "command", "Command", priority=True),
         Binding("question_mark", "help", "Help"),
         Binding("q", "quit", "Quit"),
         Binding("ctrl+c", "quit", "Quit", show=False, priority=True),
@@ -228,6 +384,7 @@ class ConsoleApp(App[int]):
         self._rows: dict[str, dict[str, Text]] = {}
         """The cells each row shows now, by row key: only those that changed are redrawn."""
         self._columns: list[Column] = []
+        self._flags_width = 0
         self._ending = False
         self._quit_after: Campaign | None = None
         """The STOP that quitting waits for (q then y while particles move)."""
@@ -235,9 +392,9 @@ class ConsoleApp(App[int]):
     def compose(self) -> ComposeResult:
         yield Static(id="status")
         yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
-        yield RichLog(id="messages", wrap=True, markup=False)
+        yield MessageLog(id="messages")
         # Not select_on_focus: a prefilled command is completed, not typed over.
-        yield Input(
+        yield CommandLine(
             placeholder="command (Enter sends, Esc goes back to the table; 'help' lists them)",
             id="command",
             select_on_focus=False,
@@ -249,8 +406,9 @@ class ConsoleApp(App[int]):
     def on_mount(self) -> None:
         self.query_one("#table", DataTable).focus()
         welcome = REPLAY_WELCOME if self.read_only else WELCOME
-        self.query_one("#messages", RichLog).write(Text(welcome, style="bold"))
+        self._write(welcome, "bold")
         self._fit_columns(self.size.width)
+        self._fit_table(self.size.height)
         self.refresh_view()
         self.set_interval(self.refresh_s, self.refresh_view)
         self.set_interval(POLL_S, self._tick)
@@ -281,8 +439,13 @@ class ConsoleApp(App[int]):
 
     def on_resize(self, event: events.Resize) -> None:
         self._fit_columns(event.size.width)
+        self._fit_table(event.size.height)
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in PROMPTING_ACTIONS and (
+            self.screen is not self.screen_stack[0] or isinstance(self.focused, Input)
+        ):
+            return False  # the key is a letter in the command line, or a dialog is open
         # A replay cannot send: its keys are not offered at all.
         return not (self.read_only and action in SENDING_ACTIONS)
 
@@ -333,16 +496,25 @@ class ConsoleApp(App[int]):
 
     def _fit_columns(self, width: int) -> None:
         columns = visible_columns(width)
-        if columns == self._columns:
+        flags = flags_width(columns, width)
+        if (columns, flags) == (self._columns, self._flags_width):
             return
         self._columns = columns
+        self._flags_width = flags
         with contextlib.suppress(NoMatches):
             table = self.query_one("#table", DataTable)
             table.clear(columns=True)
             for column in columns:
-                table.add_column(column.label, key=column.key)
+                fixed = flags if column.key == "flags" else None
+                table.add_column(column.label, key=column.key, width=fixed)
             self._rows.clear()
             self.refresh_view()
+
+    def _fit_table(self, height: int) -> None:
+        """At most as tall as leaves the messages pane its 8 lines; more rows scroll."""
+        with contextlib.suppress(NoMatches):
+            table = self.query_one("#table", DataTable)
+            table.styles.max_height = max(3, height - ABOVE_TABLE - BELOW_TABLE)
 
     def _refresh_view(self) -> None:
         model = self.model
@@ -357,6 +529,7 @@ class ConsoleApp(App[int]):
             del self._rows[key]
         for row in rows:
             cells = row_cells(row, now, model)
+            cells["flags"].truncate(self._flags_width, overflow="ellipsis")
             shown = self._rows.get(row.key)
             if shown is None:
                 table.add_row(*(cells[c.key] for c in self._columns), key=row.key)
@@ -369,17 +542,14 @@ class ConsoleApp(App[int]):
         if added:
             # Particles are heard in any order; a person looks them up by id.
             table.sort("id", key=_id_order)
-        log = self.query_one("#messages", RichLog)
         for note in model.new_notes():
-            style = {"error": "bold red", "warning": "yellow"}.get(note.level, "")
-            log.write(Text(note.text, style=style))
+            self._write(note.text, {"error": "bold red", "warning": "yellow"}.get(note.level, ""))
 
     # ---- actions ---------------------------------------------------------------------------
 
     def _write(self, text: str | Text, style: str = "") -> None:
-        self.query_one("#messages", RichLog).write(
-            text if isinstance(text, Text) else Text(text, style=style)
-        )
+        message = text if isinstance(text, Text) else Text(text, style=style)
+        self.query_one("#messages", MessageLog).add(message)
 
     def _prefill(self, text: str, hint: str | None = None) -> None:
         if hint is not None:
@@ -387,7 +557,9 @@ class ConsoleApp(App[int]):
         command = self.query_one("#command", Input)
         command.value = text
         command.cursor_position = len(text)
-        command.focus()
+        # At once, not at the next idle moment as focus() would: keys already on their way
+        # (typed fast, pasted) must land in the command line.
+        self.screen.set_focus(command)
 
     def _selected_id(self) -> int | None:
         table = self.query_one("#table", DataTable)
@@ -420,7 +592,7 @@ class ConsoleApp(App[int]):
         self._prefill("")
 
     def action_help(self) -> None:
-        self._write(help_text())
+        self.push_screen(PageScreen(help_page(self.read_only)))
 
     def action_leave_command(self) -> None:
         self.query_one("#table", DataTable).focus()
@@ -519,6 +691,11 @@ class ConsoleApp(App[int]):
         except CommandError as exc:
             self._write(str(exc), "bold red")
             return
-        if reply:
+        if prepared.name == "help" and reply.count("\n") >= 8:
+            self.action_help()  # every command: with the keys, as ? shows them
+        elif prepared.name == "params":
+            params = ("Parameters (set NAME VALUE [ID|all])", params_entries())
+            self.push_screen(PageScreen(page(params)))
+        elif reply:
             self._write(reply)
         self.refresh_view()

@@ -76,18 +76,24 @@ def help_text(command: str | None = None) -> str:
         if entry is None:
             raise CommandError(f"No command '{command}'. Commands: {', '.join(COMMANDS)}")
         return f"{entry.usage}\n  {entry.summary}"
-    width = max(len(entry.usage) for entry in COMMANDS.values())
-    return "\n".join(f"{entry.usage:<{width}}  {entry.summary}" for entry in COMMANDS.values())
+    # Usage above its summary: two columns would leave the summaries a sliver of an 80-column
+    # screen beside the longest usage.
+    return "\n".join(f"{entry.usage}\n    {entry.summary}" for entry in COMMANDS.values())
+
+
+def params_entries() -> list[tuple[str, str]]:
+    """(name and number, range, default and meaning) of every parameter."""
+    return [
+        (
+            f"{param.name.lower()} ({int(param)})",
+            f"{spec.min}..{spec.max}, default {spec.default}: {spec.description}",
+        )
+        for param, spec in PARAM_SPECS.items()
+    ]
 
 
 def params_text() -> str:
-    lines = []
-    for param, spec in PARAM_SPECS.items():
-        lines.append(
-            f"{param.name.lower():<18} {int(param):>3}  {spec.min}..{spec.max} "
-            f"(default {spec.default})  {spec.description}"
-        )
-    return "\n".join(lines)
+    return "\n".join(f"{name}  {text}" for name, text in params_entries())
 
 
 def parse_param(text: str) -> Param:

@@ -84,9 +84,11 @@ class JsonlWriter(Listener):
             path.parent.mkdir(parents=True, exist_ok=True)
             self._fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
         except OSError as exc:
+            in_the_way = _file_in_the_way(path.parent)
+            why = f"{in_the_way} is a file" if in_the_way else exc.strerror or str(exc)
             raise LogError(
-                f"cannot write the session log {path} ({exc.strerror or exc}); give --log-dir "
-                "a folder you can write to"
+                f"cannot write the session log {path} ({why}); give --log-dir a folder you can "
+                "write to"
             ) from None
         self.write(
             {
@@ -160,6 +162,15 @@ class JsonlWriter(Listener):
             fd, self._fd = self._fd, None
         if fd is not None:
             os.close(fd)
+
+
+def _file_in_the_way(folder: Path) -> Path | None:
+    """The file that stands where folder, or a folder above it, should be ("File exists" and
+    "Not a directory" name neither)."""
+    for place in (*reversed(folder.parents), folder):
+        if place.exists() and not place.is_dir():
+            return place
+    return None
 
 
 class LogError(Exception):

@@ -33,6 +33,7 @@ class ReplayRadio(Radio):
         self.path = path
         self.speed = speed
         self._items: list[tuple[float, Packet | tuple[LinkState, str]]] = []
+        ended: float | None = None
         for number, record in load_log(path):
             kind = record.get("kind")
             if kind == "rx":
@@ -45,7 +46,13 @@ class ReplayRadio(Radio):
                 fields = RecordReader(path, number, record)
                 at = fields.number("t")
                 self._items.append((at, (LinkState(record["state"]), str(record.get("text", "")))))
+            elif kind == "end":
+                ended = RecordReader(path, number, record).number("t")
         self.start_time = self._items[0][0] if self._items else time.time()
+        last = self._items[-1][0] if self._items else self.start_time
+        self.end_time = last if ended is None else max(ended, last)
+        """Where the replay's clock stops: the session's end, so that a finished replay goes on
+        showing how things stood then (not every particle SILENT, as the wall clock would)."""
         self._next = 0
         self._clock = self.start_time
         self._wall_start: float | None = None
@@ -80,7 +87,8 @@ class ReplayRadio(Radio):
     def now(self) -> float:
         if self._wall_start is None or math.isinf(self.speed):
             return self._clock
-        return self.start_time + (time.monotonic() - self._wall_start) * self.speed
+        elapsed = (time.monotonic() - self._wall_start) * self.speed
+        return min(self.start_time + elapsed, self.end_time)
 
     def send(self, data: bytes) -> None:
         raise ReadOnlyRadioError("This is a replay of a log; nothing can be sent to the particles.")

@@ -33,6 +33,26 @@ def result_name(value: int) -> str:
         return f"result {value}"
 
 
+# What a person does about a refusal: SERVO_CAL_3 = 2000 lies inside 500..2500, so the reason
+# (a table that would no longer rise) must be said, not only named.
+REFUSAL_ADVICE: dict[int, str] = {
+    ParamResult.BUSY: "STOP them first",
+    ParamResult.OUT_OF_RANGE: "'params' lists the ranges",
+    ParamResult.UNKNOWN_PARAM: "a firmware without this parameter",
+    ParamResult.SERVO_TABLE_NOT_MONOTONIC: (
+        "SERVO_CAL_0..8 must keep rising (or falling) from point to point: change the "
+        "neighbouring points first"
+    ),
+    ParamResult.RADIUS_MIN_NOT_BELOW_MAX: "RADIUS_MIN_UM must stay below RADIUS_MAX_UM",
+}
+
+
+def result_text(value: int) -> str:
+    """A result's name, and for a refusal what to do about it."""
+    advice = REFUSAL_ADVICE.get(value)
+    return result_name(value) + (f": {advice}" if advice else "")
+
+
 def ids_text(ids: list[int] | set[int] | tuple[int, ...]) -> str:
     """Particle ids with runs shortened: "1-6, 9, 10"."""
     ordered = sorted(set(ids))
@@ -175,8 +195,10 @@ class ParamQuery:
             parts.append(f"{len(ok)}/{len(self.expected | set(self.replies))} OK")
             for result in sorted({r for r, _ in self.replies.values()} - {ParamResult.OK}):
                 ids = [i for i, (r, _) in self.replies.items() if r == result]
-                advice = " (STOP them first)" if result == ParamResult.BUSY else ""
-                parts.append(f"{result_name(result)}: {ids_text(ids)}{advice}")
+                advice = REFUSAL_ADVICE.get(result)
+                parts.append(f"{result_name(result)}: {ids_text(ids)}")
+                if advice:
+                    parts[-1] += f" ({advice})"
         else:
             by_value: dict[tuple[int, int], list[int]] = {}
             for particle, answer in self.replies.items():

@@ -39,7 +39,7 @@ from particlebot.swarm.campaigns import (
     ParamQuery,
     ids_text,
     param_name,
-    result_name,
+    result_text,
     state_name,
 )
 from particlebot.swarm.roster import (
@@ -416,8 +416,14 @@ class SwarmTracker(Listener):
         query.finished_at = now
         if query.target != BROADCAST_ID and query.replies:
             result, value = query.replies[query.target]
-            text = f"Particle {query.target}: {param_name(query.param)} = {value} "
-            text += f"({result_name(result)})"
+            name = param_name(query.param)
+            if query.kind == "SET" and result != ParamResult.OK:
+                text = (
+                    f"Particle {query.target}: SET {name} = {query.value} refused, "
+                    f"{result_text(result)}; it stays {value}"
+                )
+            else:
+                text = f"Particle {query.target}: {name} = {value} ({result_text(result)})"
             self._note(text, "info" if result == ParamResult.OK else "warning")
             return
         everyone_ok = query.replies and all(
@@ -1003,5 +1009,5 @@ class SwarmTracker(Listener):
 
 
 def _param_text(particle: int, message: ParamValue) -> str:
-    result = result_name(message.result)
+    result = result_text(message.result)
     return f"Particle {particle}: {param_name(message.param)} = {message.value} ({result})"

@@ -96,7 +96,7 @@ class Coordinator {
   // STOPPING or IDLE: nothing changes (a repeated STOP does not restart the ramp).
   void stop(uint32_t now_ms, uint32_t radius_now_um, const Geometry &g);
   // IDLE only: three wiggles (IDENTIFYING), then IDLE. False in any other state.
-  bool identify(uint32_t now_ms);
+  PB_MUST_USE bool identify(uint32_t now_ms);
 
   // Advances the schedule to now_ms and returns the first event that needs the owner (kNone when
   // there is none). Call it again until kNone. can_broadcast holds INTENSITY back until the

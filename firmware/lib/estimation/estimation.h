@@ -5,6 +5,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "protocol_gen.h"
+
 namespace pb {
 
 // S_n saturates here: STATUS and the schedule carry it in one byte.
@@ -58,7 +60,7 @@ class IntensityRecord {
   IntensityRecord() : count_(0) {}
   void clear() { count_ = 0; }
   // False when the record is full and the sender is new.
-  bool add(uint8_t sender, uint16_t reading);
+  PB_MUST_USE bool add(uint8_t sender, uint16_t reading);
   uint8_t count() const { return count_; }
   const uint16_t *readings() const { return readings_; }
 

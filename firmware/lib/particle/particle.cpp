@@ -167,7 +167,10 @@ void Particle::handle_frame(const Frame &frame, uint32_t now_ms) {
       IdentifyMessage m;
       if (m.decode(frame.payload, frame.length) && addressed_to_me(m.target)) {
         end_hold();
-        coordinator_.identify(now_ms);
+        if (!coordinator_.identify(now_ms)) {
+          // Not idle (in a run, stopping): no wiggle. The STATUS below carries the state it
+          // stays in, which is how the console learns that IDENTIFY was refused.
+        }
         answer_with_status(m.target, now_ms);
       }
       break;
@@ -258,7 +261,10 @@ void Particle::handle_intensity(uint8_t sender, const IntensityMessage &m) {
                     m.round == static_cast<uint16_t>(round + 1);
   if (!current && !next) return;
   use_record(m.run_id, m.round);
-  record_.add(sender, m.intensity);
+  if (!record_.add(sender, m.intensity)) {
+    // A 33rd sender in one round: the record is full and this reading is left out of S_n, as
+    // the firmware documents (estimation.h). The group size N then counts at most 32.
+  }
 }
 
 void Particle::use_record(uint8_t run_id, uint16_t round) {

@@ -604,6 +604,32 @@ def _permute_rows(rows: npt.NDArray, order: npt.NDArray[np.int64], lo: int, hi: 
 
 
 @numba.njit(parallel=True, cache=True)
+def _fill_chunks(
+    bounds: npt.NDArray[np.int64],
+    pos: FloatArray,
+    cells: npt.NDArray[np.int64],
+    start: npt.NDArray[np.int64],
+    members: npt.NDArray[np.int64],
+    ncx: int,
+    ncy: int,
+    radius: float,
+    nbr: npt.NDArray[np.int32],
+    ncount: npt.NDArray[np.int32],
+) -> int:
+    """_fill_lists over every chunk in parallel; the longest list found."""
+    chunks = bounds.shape[0] - 1
+    longest = np.zeros(chunks, dtype=np.int64)
+    for c in numba.prange(chunks):
+        longest[c] = _fill_lists(
+            bounds[c], bounds[c + 1], pos, cells, start, members, ncx, ncy, radius, nbr, ncount
+        )
+    most = 0
+    for c in range(chunks):
+        most = max(most, longest[c])
+    return most
+
+
+@numba.njit(cache=True)
 def build_lists(
     pos: FloatArray,
     ref: FloatArray,
@@ -635,20 +661,14 @@ def build_lists(
         for p in range(n):
             ext[p] = scratch[members[p]]
         _, _, _, ncx, ncy, cells, start, members = _grid(pos, radius)
-    ref[:, :] = pos
+    for i in range(n):
+        ref[0, i] = pos[0, i]
+        ref[1, i] = pos[1, i]
     while True:
-        longest = np.zeros(chunks, dtype=np.int64)
         if chunks == 1:
-            longest[0] = _fill_lists(
-                0, n, pos, cells, start, members, ncx, ncy, radius, nbr, ncount
-            )
+            need = _fill_lists(0, n, pos, cells, start, members, ncx, ncy, radius, nbr, ncount)
         else:
-            for c in numba.prange(chunks):
-                longest[c] = _fill_lists(
-                    bounds[c], bounds[c + 1], pos, cells, start, members, ncx, ncy, radius,
-                    nbr, ncount,
-                )  # fmt: skip
-        need = longest.max()
+            need = _fill_chunks(bounds, pos, cells, start, members, ncx, ncy, radius, nbr, ncount)
         if need <= nbr.shape[1]:
             return nbr
         nbr = np.empty((n, need + 8), dtype=np.int32)
@@ -658,6 +678,57 @@ def build_lists(
 
 
 @numba.njit(parallel=True, cache=True)
+def _kinematics_chunks(
+    bounds: npt.NDArray[np.int64],
+    step: int,
+    targets: FloatArray,
+    ext: npt.NDArray[np.int64],
+    pos: FloatArray,
+    ref: FloatArray,
+    vel: FloatArray,
+    vel_old: FloatArray,
+    body: FloatArray,
+    flags: npt.NDArray[np.uint8],
+    prm: FloatArray,
+) -> float:
+    """_kinematics over every chunk in parallel; the largest squared displacement."""
+    chunks = bounds.shape[0] - 1
+    worst = np.zeros(chunks)
+    for c in numba.prange(chunks):
+        worst[c] = _kinematics(
+            bounds[c], bounds[c + 1], step, targets, ext, pos, ref, vel, vel_old, body, flags, prm
+        )
+    most = 0.0
+    for c in range(chunks):
+        most = max(most, worst[c])
+    return most
+
+
+@numba.njit(parallel=True, cache=True)
+def _forces_chunks(
+    bounds: npt.NDArray[np.int64],
+    pos: FloatArray,
+    vel_old: FloatArray,
+    vel: FloatArray,
+    body: FloatArray,
+    flags: npt.NDArray[np.uint8],
+    nbr: npt.NDArray[np.int32],
+    ncount: npt.NDArray[np.int32],
+    rects: FloatArray,
+    circles: FloatArray,
+    objects: FloatArray,
+    acc: FloatArray,
+    prm: FloatArray,
+) -> None:
+    """_forces over every chunk in parallel."""
+    for c in numba.prange(bounds.shape[0] - 1):
+        _forces(
+            bounds[c], bounds[c + 1], pos, vel_old, vel, body, flags, nbr, ncount, rects,
+            circles, objects, acc[c], prm,
+        )  # fmt: skip
+
+
+@numba.njit(cache=True)
 def advance(
     steps: int,
     targets: FloatArray,
@@ -678,26 +749,20 @@ def advance(
     prm: FloatArray,
 ) -> tuple[npt.NDArray[np.int32], int]:
     """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). One chunk
-    runs inline, several in parallel. Returns the neighbour lists' array (possibly a new, wider
-    one) and how many times the lists were rebuilt."""
+    runs inline (no parallel region to start), several in parallel. Returns the neighbour lists'
+    array (possibly a new, wider one) and how many times the lists were rebuilt."""
     chunks = bounds.shape[0] - 1
     n = pos.shape[1]
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
-    worst = np.zeros(chunks)
     rebuilds = 0
     for s in range(steps):
         if chunks == 1:
-            worst[0] = _kinematics(0, n, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm)
+            moved = _kinematics(0, n, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm)
         else:
-            for c in numba.prange(chunks):
-                worst[c] = _kinematics(
-                    bounds[c], bounds[c + 1], s, targets, ext, pos, ref, vel, vel_old, body,
-                    flags, prm,
-                )  # fmt: skip
+            moved = _kinematics_chunks(
+                bounds, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm
+            )
         _objects_move(objects, prm)
-        moved = 0.0
-        for c in range(chunks):
-            moved = max(moved, worst[c])
         if moved > limit:
             nbr = build_lists(
                 pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
@@ -709,11 +774,10 @@ def advance(
                 acc[0], prm,
             )  # fmt: skip
         else:
-            for c in numba.prange(chunks):
-                _forces(
-                    bounds[c], bounds[c + 1], pos, vel_old, vel, body, flags, nbr, ncount,
-                    rects, circles, objects, acc[c], prm,
-                )  # fmt: skip
+            _forces_chunks(
+                bounds, pos, vel_old, vel, body, flags, nbr, ncount, rects, circles, objects,
+                acc, prm,
+            )  # fmt: skip
         if objects.shape[0] > 0:
             _objects_step(objects, acc, chunks, rects, circles, prm)
     return nbr, rebuilds

@@ -210,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
     except VideoError as exc:
         return fail(f"simulate: {exc} (the run itself is complete in its folder)")
     except KeyboardInterrupt:
-        print("particlebot: simulate: stopped before the run began; nothing was written")
+        print("particlebot: simulate: stopped before the run began", file=sys.stderr)
         return 130
     _report(summary, args.json)
     return 0 if summary.finished else 130

@@ -156,32 +156,46 @@ def _servo(r: float, target: float, fr: float, fa: float, prm: FloatArray) -> fl
 
 
 @numba.njit(cache=True, inline="always")
-def _obstacle_push(
-    x: float, y: float, r: float, rects: FloatArray, circles: FloatArray
-) -> tuple[float, float, float]:
-    """How far obstacles cut into a disc: the sum over obstacles of (outward normal x depth),
-    and the summed depth. Rectangles push out the shortest way (a corner radially)."""
-    px = 0.0
-    py = 0.0
+def _wall_push(
+    nx: float, ny: float, depth: float, vx: float, vy: float, prm: FloatArray
+) -> tuple[float, float]:
+    """Force of one obstacle on a disc it cuts into by `depth` along the outward normal n:
+    2k x depth, with damping and shear against the disc's own velocity."""
+    vn = -vx * nx - vy * ny
+    spring = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
+    fx = spring * depth * nx - prm[P_DAMPING] * vx + prm[P_SHEAR] * (-vx - vn * nx)
+    fy = spring * depth * ny - prm[P_DAMPING] * vy + prm[P_SHEAR] * (-vy - vn * ny)
+    return fx, fy
+
+
+@numba.njit(cache=True, inline="always")
+def _obstacle_force(
+    x: float, y: float, r: float, vx: float, vy: float, rects: FloatArray, circles: FloatArray,
+    prm: FloatArray,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Force of every obstacle a disc overlaps, each on its own (as the published code adds
+    them), and the sum of their magnitudes for the contact-force sum. A rectangle pushes out the
+    shortest way: off the nearest face, or radially off a corner."""
+    fx = 0.0
+    fy = 0.0
     total = 0.0
     for o in range(rects.shape[0]):
         x1 = rects[o, 0]
         x2 = rects[o, 1]
         y1 = rects[o, 2]
         y2 = rects[o, 3]
-        if x < x1 - r or x > x2 + r or y < y1 - r or y > y2 + r:
+        if x <= x1 - r or x >= x2 + r or y <= y1 - r or y >= y2 + r:
             continue
-        qx = min(max(x, x1), x2)
-        qy = min(max(y, y1), y2)
-        dx = x - qx
-        dy = y - qy
+        dx = x - min(max(x, x1), x2)
+        dy = y - min(max(y, y1), y2)
         d2 = dx * dx + dy * dy
         if d2 > 0.0:
+            if d2 >= r * r:
+                continue
             d = math.sqrt(d2)
-            if d < r:
-                px += dx / d * (r - d)
-                py += dy / d * (r - d)
-                total += r - d
+            nx = dx / d
+            ny = dy / d
+            depth = r - d
         else:
             # Centre inside: out through the nearest face.
             left = x - x1
@@ -190,15 +204,12 @@ def _obstacle_push(
             above = y2 - y
             least = min(min(left, right), min(below, above))
             depth = least + r
-            if least == left:
-                px -= depth
-            elif least == right:
-                px += depth
-            elif least == below:
-                py -= depth
-            else:
-                py += depth
-            total += depth
+            nx = -1.0 if least == left else (1.0 if least == right else 0.0)
+            ny = 0.0 if nx != 0.0 else (-1.0 if least == below else 1.0)
+        px, py = _wall_push(nx, ny, depth, vx, vy, prm)
+        fx += px
+        fy += py
+        total += math.sqrt(px * px + py * py)
     for o in range(circles.shape[0]):
         dx = x - circles[o, 0]
         dy = y - circles[o, 1]
@@ -206,30 +217,11 @@ def _obstacle_push(
         d2 = dx * dx + dy * dy
         if d2 < reach * reach and d2 > 0.0:
             d = math.sqrt(d2)
-            px += dx / d * (reach - d)
-            py += dy / d * (reach - d)
-            total += reach - d
-    return px, py, total
-
-
-@numba.njit(cache=True, inline="always")
-def _obstacle_force(
-    x: float, y: float, r: float, vx: float, vy: float, rects: FloatArray, circles: FloatArray,
-    prm: FloatArray,
-) -> tuple[float, float, float]:  # fmt: skip
-    """Obstacle force on a disc: 2k x depth outward, damping and shear against its own velocity;
-    and its magnitude (for the contact-force sum)."""
-    ox, oy, depth = _obstacle_push(x, y, r, rects, circles)
-    if depth <= 0.0:
-        return 0.0, 0.0, 0.0
-    norm = math.sqrt(ox * ox + oy * oy)
-    nx = ox / norm if norm > 0.0 else 0.0
-    ny = oy / norm if norm > 0.0 else 0.0
-    vn = -vx * nx - vy * ny
-    spring = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
-    fx = spring * ox - prm[P_DAMPING] * vx + prm[P_SHEAR] * (-vx - vn * nx)
-    fy = spring * oy - prm[P_DAMPING] * vy + prm[P_SHEAR] * (-vy - vn * ny)
-    return fx, fy, math.sqrt(fx * fx + fy * fy)
+            px, py = _wall_push(dx / d, dy / d, reach - d, vx, vy, prm)
+            fx += px
+            fy += py
+            total += math.sqrt(px * px + py * py)
+    return fx, fy, total
 
 
 @numba.njit(cache=True, inline="always")

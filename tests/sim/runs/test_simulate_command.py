@@ -4,7 +4,6 @@ in one line with nothing written, and Ctrl-C followed by --resume."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -91,10 +90,14 @@ def test_flags_change_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixt
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_nothing_written(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    message: str,
 ) -> None:
     folder = tmp_path / "run"
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)  # where a default runs/ folder would appear
 
     with pytest.raises(SystemExit) as stopped:
         code = main(["simulate", *argv, "-o", str(folder)] if "--resume" not in argv else

@@ -155,18 +155,7 @@ def draw_swarm(frame: Frame, view: View, size_in: tuple[float, float] | None = N
     ax.grid(True, color="#e2ded5", linewidth=0.6, zorder=0)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    for rect in view.arena.rects:
-        ax.add_patch(
-            Rectangle(
-                (rect.x_min, rect.y_min),
-                rect.x_max - rect.x_min,
-                rect.y_max - rect.y_min,
-                facecolor=OBSTACLE,
-                zorder=2,
-            )
-        )
-    for circle in view.arena.circles:
-        ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE, zorder=2))
+    _draw_obstacles(ax, view.arena)
     colours = frame.colours()
     if len(frame.x) <= DISC_LIMIT:
         ax.add_collection(
@@ -228,6 +217,16 @@ def draw_swarm(frame: Frame, view: View, size_in: tuple[float, float] | None = N
     bar.set_label("phase: fraction of the cycle (expansion starts at 0)")
     ax.set_title(f"{view.title}  t = {_clock(frame.t)}")
     return figure
+
+
+def _draw_obstacles(ax: Any, arena: Arena) -> None:
+    for rect in arena.rects:
+        width, height = rect.x_max - rect.x_min, rect.y_max - rect.y_min
+        ax.add_patch(
+            Rectangle((rect.x_min, rect.y_min), width, height, facecolor=OBSTACLE, zorder=2)
+        )
+    for circle in arena.circles:
+        ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE, zorder=2))
 
 
 def _arrow_to_lamp(ax: Any, view: View) -> None:
@@ -292,17 +291,7 @@ def save_track_plot(path: Path, run: PublishedRun, view: View) -> Path:
     path_ax, distance_ax = figure.subplots(1, 2, width_ratios=(1.0, 1.2))
     cx, cy = run.centroid_m[:, 0], run.centroid_m[:, 1]
     lx, ly = view.lamp
-    for rect in view.arena.rects:
-        path_ax.add_patch(
-            Rectangle(
-                (rect.x_min, rect.y_min),
-                rect.x_max - rect.x_min,
-                rect.y_max - rect.y_min,
-                facecolor=OBSTACLE,
-            )
-        )
-    for circle in view.arena.circles:
-        path_ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE))
+    _draw_obstacles(path_ax, view.arena)
     path_ax.plot(cx, cy, color="#1f77b4", linewidth=1.5, label="centroid")
     path_ax.plot(cx[:1], cy[:1], "o", color="#2ca02c", label="start")
     path_ax.plot(cx[-1:], cy[-1:], "s", color="#d62728", label="end")

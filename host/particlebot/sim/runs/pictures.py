@@ -41,6 +41,8 @@ OBSTACLE = "#3a3a3a"
 LAMP = "#ffd21f"
 LAMP_IN_VIEW = 1.5
 """A picture takes in the lamp when it lies within this many swarm spans of the swarm."""
+SMALLEST_STAMP_PX = 2.0
+"""A picture stamps particles of this radius in pixels or more; smaller ones become coverage."""
 DISC_LIMIT = 20_000
 """Up to this many particles each is drawn as a disc of its radius; beyond, every particle
 colours the pixel it lies in (a disc would be smaller than a pixel anyway)."""
@@ -267,6 +269,16 @@ def _raster(
     iy = np.floor((frame.y - y0) * metre_px).astype(np.int64)
     radius_px = frame.radius * metre_px
     reach = max(0, math.floor(float(radius_px.max())))
+    if float(np.median(radius_px)) < SMALLEST_STAMP_PX:
+        # A few pixels or less: cells about one (largest) diameter wide, each coloured by its
+        # particles and as opaque as they cover it (stamps that small would look sparse).
+        cells_x = max(1, round((x1 - x0) / (2 * float(frame.radius.max()))))
+        cell_m = (x1 - x0) / cells_x
+        cells_y = max(1, round((y1 - y0) / cell_m))
+        cx = np.floor((frame.x - x0) / cell_m).astype(np.int64)
+        cy = np.floor((frame.y - y0) / cell_m).astype(np.int64)
+        coarse = np.zeros((cells_y, cells_x, 4))
+        return _coverage(cx, cy, frame.radius / cell_m, colours, coarse)
     for dy in range(-reach, reach + 1):
         for dx in range(-reach, reach + 1):
             px, py = ix + dx, iy + dy
@@ -274,6 +286,34 @@ def _raster(
             if dx or dy:
                 keep &= dx * dx + dy * dy <= radius_px**2
             image[py[keep], px[keep]] = colours[keep]
+    return image
+
+
+def _coverage(
+    ix: npt.NDArray[np.int64],
+    iy: npt.NDArray[np.int64],
+    radius_px: FloatArray,
+    colours: npt.NDArray[np.float64],
+    image: npt.NDArray[np.float64],
+) -> npt.NDArray[np.float64]:
+    """Particles smaller than a pixel: each pixel takes the area-weighted mean colour of the
+    particles in it and is as opaque as they cover it, so a swarm reads as its density."""
+    height_px, width_px = image.shape[:2]
+    inside = (ix >= 0) & (ix < width_px) & (iy >= 0) & (iy < height_px)
+    cell = iy[inside] * width_px + ix[inside]
+    area = math.pi * radius_px[inside] ** 2
+    covered = np.bincount(cell, weights=area, minlength=height_px * width_px)
+    rgb = np.stack(
+        [
+            np.bincount(cell, weights=area * colours[inside, c], minlength=height_px * width_px)
+            for c in range(3)
+        ],
+        axis=1,
+    )
+    painted = covered > 0
+    flat = image.reshape(-1, 4)
+    flat[painted, :3] = rgb[painted] / covered[painted, None]
+    flat[painted, 3] = np.minimum(covered[painted], 1.0)
     return image
 
 

@@ -642,12 +642,10 @@ def build_lists(
     if sort:
         _permute(pos, members)
         _permute(vel, members)
-        _permute(vel_old, members)
         _permute(body, members)
         _permute(flags, members)
-        scratch = ext.copy()
-        for p in range(n):
-            ext[p] = scratch[members[p]]
+        _permute(ext.reshape(1, n), members)
+        vel_old[:, :] = vel
         ncx, ncy, cells, start, members = _grid(pos, radius)
     for i in range(n):
         ref[0, i] = pos[0, i]

@@ -184,3 +184,19 @@ def test_resume_with_an_end_before_the_snapshot_is_refused(
 
     assert code == 2
     assert "is at 2 s already" in capsys.readouterr().err
+
+
+def test_render_films_a_run_folder_with_per_particle_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = tmp_path / "run"
+    argv = ["simulate", "--particles", "6", "--duration", "4", "--dump-interval", "1"]
+    assert main([*argv, "--per-particle", "-o", str(folder)]) == 0
+    video = tmp_path / "run.mp4"
+
+    code = main(["render", str(folder), "-o", str(video), "--size", "320x180", "--fps", "1"])
+
+    assert code == 0, capsys.readouterr().err
+    assert video.stat().st_size > 0
+    truth = video.with_suffix(".truth.csv").read_text().splitlines()
+    assert len(truth) >= 1 + 4  # a header, then a frame per second of the run

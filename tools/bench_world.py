@@ -7,10 +7,14 @@ import argparse
 import json
 import math
 import os
+import re
 import resource
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -65,6 +69,58 @@ def measure(
     }
 
 
+LAMMPS_INPUT = """# 2-D granular discs of unit mass, Hooke contacts (k 1000, damping 10), packed
+units si
+dimension 2
+boundary f f p
+atom_style sphere
+comm_modify vel yes
+read_data blob.data
+set group all mass 1.0
+neighbor 0.02 bin
+neigh_modify delay 0 every 1 check yes
+pair_style gran/hooke 1000.0 NULL 10.0 NULL 0.4 0
+pair_coeff * *
+fix move all nve/sphere disc
+fix flat all enforce2d
+thermo_modify lost ignore
+timestep 0.01
+run {steps}
+"""
+
+
+def lammps(count: int, steps: int, processes: int, workdir: Path) -> float | None:
+    """Particle-steps/s of Debian's LAMMPS on the same packed blob (fixed radii, contacts only:
+    LAMMPS has no magnets or servo); None when `lmp` is not installed."""
+    lmp = shutil.which("lmp")
+    if lmp is None:
+        return None
+    x, y = hex_blob(count, 2 * PhysicsParams().r_min)
+    span = float(np.abs(np.concatenate([x, y])).max()) + 1.0
+    rows = "\n".join(
+        f"{i + 1} 1 0.155 1.0 {a:.6f} {b:.6f} 0.0"
+        for i, (a, b) in enumerate(zip(x, y, strict=True))
+    )
+    (workdir / "blob.data").write_text(
+        f"blob\n\n{count} atoms\n1 atom types\n{-span} {span} xlo xhi\n{-span} {span} ylo yhi\n"
+        f"-0.5 0.5 zlo zhi\n\nAtoms # sphere\n\n{rows}\n"
+    )
+    (workdir / "in.blob").write_text(LAMMPS_INPUT.format(steps=steps))
+    command = [lmp, "-in", "in.blob", "-log", "none", "-screen", "lammps.out"]
+    if processes > 1:
+        command = [
+            "mpirun",
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "-np",
+            str(processes),
+            *command,
+        ]
+    subprocess.run(command, cwd=workdir, check=True, capture_output=True)
+    loop = re.search(r"Loop time of ([0-9.eE+-]+)", (workdir / "lammps.out").read_text())
+    return count * steps / float(loop.group(1)) if loop else None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument(
@@ -79,6 +135,7 @@ def main() -> int:
         default=PhysicsParams().shear,
         help="contact shear (the published 40 makes packed blobs boil at dt = 0.01 s; 20 does not)",
     )
+    parser.add_argument("--lammps", action="store_true", help="also run Debian's LAMMPS (lmp)")
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child measuring one size
     args = parser.parse_args()
     if args.one is not None:
@@ -104,6 +161,12 @@ def main() -> int:
         print(f"{count:>10} {r['steps']:>6} {r['particle_steps_per_s']:>17.3g}"
               f" {r['realtime_factor']:>11.2f} {r['peak_rss_mb']:>11.0f} {r['rebuilds']:>8}",
               flush=True)  # fmt: skip
+        if args.lammps:
+            with tempfile.TemporaryDirectory() as workdir:
+                for processes in (1, 2):
+                    rate = lammps(count, 200, processes, Path(workdir))
+                    if rate is not None:
+                        print(f"{'':>10} LAMMPS gran/hooke, {processes} process(es): {rate:.3g}")
     return 0
 
 

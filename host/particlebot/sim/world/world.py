@@ -68,14 +68,14 @@ class World:
     """A 2-D world of disc-shaped particles, run by a vectorised controller.
 
     Particles start at rest (or with `velocity`: vx, vy arrays, as a published CSV resumes),
-    contracted (or with `radius`). Particles keep the index the caller gave them (x[i], y[i]) in everything the World shows;
-    internally the kernels keep them sorted by space. Time advances in steps of params.dt with
-    step(n); observers added with add_observer() are called every so many steps (outputs live
-    there, never in the loop). The published model's order within a step: dead particles are
-    chosen when their time comes; the controller commands radii; the servo moves them (stall
-    limit); positions advance by the old velocities and walls reflect; forces from the new
-    positions and old velocities (contacts, magnets, obstacles, passive objects); velocities
-    with ground friction; t += dt.
+    contracted (or with `radius`). Particles keep the index the caller gave them (x[i], y[i]) in
+    everything the World shows; internally the kernels keep them sorted by space. Time advances
+    in steps of params.dt with step(n); observers added with add_observer() are called every so
+    many steps (outputs live there, never in the loop). The published model's order within a
+    step: dead particles are chosen when their time comes; the controller commands radii; the
+    servo moves them (stall limit); positions advance by the old velocities and walls reflect;
+    forces from the new positions and old velocities (contacts, magnets, obstacles, passive
+    objects); velocities with ground friction; t += dt.
     """
 
     _nbr: npt.NDArray[np.int32]

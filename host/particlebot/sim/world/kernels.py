@@ -547,7 +547,9 @@ def _fill_lists(
     """Half lists of particles lo..hi, the particles being in cell order: the later ones of its
     own cell and the cell to its right (one run of indices), then the three cells above (another
     run). Returns the longest list found, which may exceed nbr's width (then redo wider)."""
-    width = nbr.shape[1]
+    # Branch-free: every candidate is written at the list's end and kept only if close (the
+    # test is a coin toss a branch predictor loses); the last column is that scratch slot.
+    width = nbr.shape[1] - 1
     longest = 0
     r2 = radius * radius
     for i in range(lo, hi):
@@ -561,19 +563,15 @@ def _fill_lists(
         for j in range(i + 1, start[row + right + 1]):
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
-            if dx * dx + dy * dy < r2:
-                if count < width:
-                    nbr[i, count] = j
-                count += 1
+            nbr[i, min(count, width)] = j
+            count += dx * dx + dy * dy < r2
         if cy + 1 < ncy:
             above = row + ncx
             for j in range(start[above + max(cx - 1, 0)], start[above + right + 1]):
                 dx = pos[0, j] - xi
                 dy = pos[1, j] - yi
-                if dx * dx + dy * dy < r2:
-                    if count < width:
-                        nbr[i, count] = j
-                    count += 1
+                nbr[i, min(count, width)] = j
+                count += dx * dx + dy * dy < r2
         ncount[i] = min(count, width)
         longest = max(longest, count)
     return longest
@@ -645,8 +643,8 @@ def build_lists(
         _permute(body, members)
         _permute(flags, members)
         _permute(ext.reshape(1, n), members)
+        _permute(cells.reshape(1, n), members)  # the same grid, now in cell order
         vel_old[:, :] = vel
-        ncx, ncy, cells, start, members = _grid(pos, radius)
     for i in range(n):
         ref[0, i] = pos[0, i]
         ref[1, i] = pos[1, i]
@@ -656,9 +654,9 @@ def build_lists(
             need = _fill_lists(0, n, pos, cells, start, ncx, ncy, radius, nbr, ncount)
         else:
             need = _fill_chunks(bounds, pos, cells, start, ncx, ncy, radius, nbr, ncount)
-        if need <= nbr.shape[1]:
+        if need < nbr.shape[1]:
             return nbr
-        nbr = np.empty((n, need + 4), dtype=np.int32)
+        nbr = np.empty((n, need + 5), dtype=np.int32)
 
 
 # ---- the step loop ----------------------------------------------------------------------------

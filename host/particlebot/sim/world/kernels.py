@@ -301,18 +301,59 @@ def _kinematics(
     return worst
 
 
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pair(
+    i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
+    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    prm: FloatArray,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """One pair (j > i, rel = pj - pi): contact (spring, dashpot, shear) when they overlap, else
+    the magnets within the cutoff. j gets -f and |f| in its sum at once; returns what i gets
+    (f and its contact and attraction magnitudes). A free particle touching a member is marked
+    to join the robot."""
+    c = ri + body[B_R, j]
+    reach = c + prm[P_CUTOFF]
+    if d2 >= reach * reach or d2 == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    nx = dx / d
+    ny = dy / d
+    contact = 0.0
+    attract = 0.0
+    if d < c:
+        px, py = _contact(
+            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
+        )
+        contact = math.sqrt(px * px + py * py)
+        body[B_FR, j] += contact
+        touching = True
+    else:
+        strength = magi * body[B_MAG, j]
+        px = 0.0
+        py = 0.0
+        if strength > 0.0:
+            attract = _magnet(d - c, strength, prm)
+            px = attract * nx
+            py = attract * ny
+            body[B_FA, j] += attract
+        touching = d - c < prm[P_TOUCH_GAP]
+    body[B_FX, j] -= px
+    body[B_FY, j] -= py
+    if touching and kind_i != flags[F_KIND, j]:
+        if kind_i == FREE and flags[F_KIND, j] == MEMBER:
+            flags[F_JOINED, i] = 1
+        elif kind_i == MEMBER and flags[F_KIND, j] == FREE:
+            flags[F_JOINED, j] = 1
+    return px, py, contact, attract
+
+
 @numba.njit(cache=True, fastmath=_FAST)
 def _pairs(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
 ) -> None:  # fmt: skip
     """Second pass: every listed pair (i in lo..hi, j > i) once, from the new positions and old
-    velocities: contact (spring, dashpot, shear) when they overlap, else the magnets within the
-    cutoff; i gets f and j gets -f, both get |f| in their contact or attraction sum. A free
-    particle that touches a member is marked to join the robot."""
-    spring = prm[P_SPRING]
-    cutoff = prm[P_CUTOFF]
-    touch = prm[P_TOUCH_GAP]
+    velocities; i gets f and j gets -f, both get |f| in their contact or attraction sum."""
     for i in range(lo, hi):
         xi = pos[0, i]
         yi = pos[1, i]
@@ -329,42 +370,14 @@ def _pairs(
             j = nbr[i, k]
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
-            c = ri + body[B_R, j]
-            d2 = dx * dx + dy * dy
-            reach = c + cutoff
-            if d2 >= reach * reach or d2 == 0.0:
-                continue
-            d = math.sqrt(d2)
-            nx = dx / d
-            ny = dy / d
-            if d < c:
-                px, py = _contact(
-                    nx, ny, c - d, spring, vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
-                )
-                size = math.sqrt(px * px + py * py)
-                f_contact += size
-                body[B_FR, j] += size
-                touching = True
-            else:
-                strength = magi * body[B_MAG, j]
-                px = 0.0
-                py = 0.0
-                if strength > 0.0:
-                    pull = _magnet(d - c, strength, prm)
-                    px = pull * nx
-                    py = pull * ny
-                    f_attract += pull
-                    body[B_FA, j] += pull
-                touching = d - c < touch
+            px, py, contact, attract = _pair(
+                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
+                flags, prm,
+            )  # fmt: skip
             fx += px
             fy += py
-            body[B_FX, j] -= px
-            body[B_FY, j] -= py
-            if touching and kind_i != flags[F_KIND, j]:
-                if kind_i == FREE and flags[F_KIND, j] == MEMBER:
-                    flags[F_JOINED, i] = 1
-                elif kind_i == MEMBER and flags[F_KIND, j] == FREE:
-                    flags[F_JOINED, j] = 1
+            f_contact += contact
+            f_attract += attract
         body[B_FX, i] += fx
         body[B_FY, i] += fy
         body[B_FR, i] += f_contact
@@ -624,19 +637,17 @@ def _row_bounds(start: IntArray, ncx: int, ncy: int, bounds: IntArray) -> None:
 
 
 @numba.njit(cache=True)
-def build_lists(
+def _prepare(
     pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
-    flags: ByteArray, ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32],
-    bounds: IntArray, prm: FloatArray, sort: bool,
-) -> ListArray:  # fmt: skip
-    """Rebuilds the half neighbour lists from the current positions, first putting the particles
-    in grid-cell order when `sort` (every per-particle row and `ext` follow; without it they
-    must already be in that order, as after a restore from the lists' reference positions), and
-    re-cuts the chunk bounds on grid rows. The positions become the lists' reference. Returns
-    the lists' array (a wider one if some list did not fit)."""
-    radius = prm[P_LIST_RADIUS]
+    flags: ByteArray, ext: IntArray, bounds: IntArray, prm: FloatArray, sort: bool,
+) -> tuple[int, int, IntArray, IntArray]:  # fmt: skip
+    """The first half of a list build: grid the particles, put them in grid-cell order when
+    `sort` (every per-particle row and `ext` follow; without it they must already be in that
+    order, as after a restore from the lists' reference positions), make the positions the
+    lists' reference and re-cut the chunk bounds on grid rows. Returns the grid (shape, each
+    particle's cell, the cells' start offsets)."""
     n = pos.shape[1]
-    ncx, ncy, cells, start, members = _grid(pos, radius)
+    ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
     if sort:
         _permute(pos, members)
         _permute(vel, members)
@@ -649,6 +660,17 @@ def build_lists(
         ref[0, i] = pos[0, i]
         ref[1, i] = pos[1, i]
     _row_bounds(start, ncx, ncy, bounds)
+    return ncx, ncy, cells, start
+
+
+@numba.njit(cache=True)
+def _fill(
+    pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int, nbr: ListArray,
+    ncount: npt.NDArray[np.int32], bounds: IntArray, prm: FloatArray,
+) -> ListArray:  # fmt: skip
+    """The second half: the half lists, in a wider array if some list did not fit."""
+    radius = prm[P_LIST_RADIUS]
+    n = pos.shape[1]
     while True:
         if bounds.shape[0] == 2:
             need = _fill_lists(0, n, pos, cells, start, ncx, ncy, radius, nbr, ncount)
@@ -657,6 +679,18 @@ def build_lists(
         if need < nbr.shape[1]:
             return nbr
         nbr = np.empty((n, need + 5), dtype=np.int32)
+
+
+@numba.njit(cache=True)
+def build_lists(
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32],
+    bounds: IntArray, prm: FloatArray, sort: bool,
+) -> ListArray:  # fmt: skip
+    """Rebuilds the half neighbour lists from the current positions (see _prepare). Returns the
+    lists' array (a wider one if some list did not fit)."""
+    ncx, ncy, cells, start = _prepare(pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort)
+    return _fill(pos, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
 
 
 # ---- the step loop ----------------------------------------------------------------------------
@@ -738,10 +772,12 @@ def advance(
             rebuilds += 1
         if inline:
             _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
-            _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
         else:
             _pairs_chunks(bounds, 0, pos, vel_old, body, flags, nbr, ncount, prm)
             _pairs_chunks(bounds, 1, pos, vel_old, body, flags, nbr, ncount, prm)
+        if inline:
+            _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+        else:
             _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)

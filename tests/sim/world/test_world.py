@@ -126,6 +126,23 @@ def test_a_run_resumed_from_a_saved_snapshot_equals_the_uninterrupted_run(tmp_pa
     assert resumed.t == whole.t
 
 
+def test_a_firmware_run_resumes_from_a_snapshot_too(tmp_path: Path) -> None:
+    def build() -> World:
+        x = 0.6 + np.arange(5) * (2 * R_MIN + 0.5e-3)
+        controller = FirmwareController(FirmwareSettings(update_interval_s=20))
+        return World(x, np.zeros(5), controller=controller, lamp=Lamp(0.0, 0.0), seed=2)
+
+    whole = build()
+    whole.run(50.0)
+    first = build()
+    first.run(25.0)
+    first.snapshot().save(tmp_path / "firmware.npz")
+    resumed = World.from_snapshot(Snapshot.load(tmp_path / "firmware.npz"))
+    resumed.run(25.0)
+    assert np.array_equal(whole.positions()[0], resumed.positions()[0])
+    assert np.array_equal(whole.radii(), resumed.radii())
+
+
 def test_float32_and_float64_move_a_line_alike() -> None:
     advances = []
     precisions: tuple[Precision, ...] = ("float64", "float32")

@@ -1,0 +1,784 @@
+"""The world's compiled inner loops (numba): servo, motion, contacts, magnets, friction, lists.
+
+Memory layout (structure of arrays, rows of 2-D arrays, particles in *internal* order): at every
+list build the particles are put in grid-cell order (row by row), so that a particle's neighbours
+sit close to it in memory; `ext[i]` is the caller's index of internal slot i. Passive objects
+(few, possibly huge discs) live in their own array and meet every particle directly.
+
+    pos     float64 (2, N)  x, y            ref  float64 (2, N)  x, y at the last list build
+    vel     F       (2, N)  vx, vy          vel_old F (2, N)     last step's, for the force pass
+    body    F       (6, N)  r, contact-force sum, attraction sum, magnet factor (1, or 0 once
+                            detached), force x, force y (the last two only inside a step)
+    flags   uint8   (5, N)  kind (MEMBER / FREE / DETACHED), acting, joined, alive, held
+    nbr     int32   (N, M)  half neighbour lists: j > i within the list radius, counts in ncount
+
+F is float64 or float32 (the World's `precision`; positions are always float64: float32 cannot
+resolve a 10 um step 100 m from the origin).
+
+Each pair is evaluated once (Newton's third law: i gets f, j gets -f), as the published code's
+two one-sided evaluations give bit-identical opposite forces. The work is cut into chunks along
+grid rows: a particle's listed neighbours lie in its own chunk or the next one, so the pair pass
+runs the even chunks in parallel, then the odd ones, without atomics; every other pass writes
+only its own chunk. Results do not depend on the number of threads.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+# ---- indices into the parameter vector `prm` (float64) -------------------------------------
+P_DT = 0
+P_RMIN = 1
+P_RMAX = 2
+P_SPRING = 3
+P_DAMPING = 4
+P_SHEAR = 5
+P_OBSTACLE_SPRING = 6
+P_ATTRACTION = 7
+P_CLAMP_FORCE = 8
+P_CLAMP_GAP = 9
+P_BLEND_GAP = 10
+P_CUTOFF = 11
+P_FRICTION = 12  # mu x g: sliding deceleration
+P_STATIC = 13  # force a particle at rest resists
+P_REST_SPEED = 14
+P_MAX_SPEED = 15
+P_TORQUE = 16
+P_CONSTRAINED = 17
+P_CONTRACTION = 18
+P_HALF_WIDTH = 19
+P_SKIN = 20
+P_LIST_RADIUS = 21
+P_TOUCH_GAP = 22
+PARAM_COUNT = 23
+
+# ---- rows ----------------------------------------------------------------------------------
+B_R = 0
+B_FR = 1
+B_FA = 2
+B_MAG = 3
+B_FX = 4
+B_FY = 5
+BODY_ROWS = 6
+
+F_KIND = 0
+F_ACTING = 1
+F_JOINED = 2
+F_ALIVE = 3
+F_HELD = 4
+FLAG_ROWS = 5
+
+MEMBER = 0
+FREE = 1
+DETACHED = 2
+
+# Passive objects: one row per object.
+O_X = 0
+O_Y = 1
+O_VX = 2
+O_VY = 3
+O_R = 4
+O_INV_MASS = 5
+O_FRICTION = 6  # its sliding deceleration (mu x friction factor x g x mass factor)
+O_STATIC = 7  # force it resists at rest (static_factor x that x mass)
+O_MAG = 8
+OBJECT_COLS = 9
+
+# Per-chunk reduction of what particles do to object m: fx, fy.
+ACC_COLS = 2
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+ByteArray = npt.NDArray[np.uint8]
+ListArray = npt.NDArray[np.int32]
+
+# Pair arithmetic may be reassociated and contracted (FMA); nothing in it tests for NaN.
+_FAST = {"contract", "arcp", "nsz", "reassoc"}
+
+
+# ---- the laws --------------------------------------------------------------------------------
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
+    """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
+    factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
+    clamp_gap = prm[P_CLAMP_GAP]
+    blend_gap = prm[P_BLEND_GAP]
+    low = prm[P_CLAMP_FORCE]
+    if gap < clamp_gap:
+        return low * strength
+    a = prm[P_ATTRACTION]
+    if gap < blend_gap:
+        top = a / (blend_gap * blend_gap)
+        return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
+    return strength * a / (gap * gap)
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _contact(
+    nx: float, ny: float, overlap: float, spring: float, dvx: float, dvy: float, prm: FloatArray
+) -> tuple[float, float]:
+    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
+    minus first), shear on its tangential part."""
+    vn = dvx * nx + dvy * ny
+    shear = prm[P_SHEAR]
+    damping = prm[P_DAMPING]
+    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
+    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
+    return fx, fy
+
+
+@numba.njit(cache=True, inline="always")
+def _servo(r: float, target: float, fr: float, fa: float, prm: FloatArray) -> float:
+    """The published servo with its stall limit: the new radius for a commanded one."""
+    r_min = prm[P_RMIN]
+    r_max = prm[P_RMAX]
+    dt = prm[P_DT]
+    target = min(max(target, r_min), r_max)
+    dr1 = target - r
+    if dr1 > 0.0:
+        c = prm[P_TORQUE]
+        speed = prm[P_MAX_SPEED] * r_max
+        torque = min(dr1 * c * r / (speed * dt), c)
+        dr = speed / c * (torque / r - fr) * dt if torque / r > fr else 0.0
+    elif prm[P_CONSTRAINED] != 0.0:
+        cc = prm[P_CONTRACTION]
+        dr = (cc * dr1 + fa * r) / cc if -cc * dr1 > fa * r else 0.0
+        dr = max(dr, -r_max * dt)
+    else:
+        dr = dr1
+    return min(max(r + dr, r_min), r_max)
+
+
+@numba.njit(cache=True, inline="always")
+def _wall_push(
+    nx: float, ny: float, depth: float, vx: float, vy: float, prm: FloatArray
+) -> tuple[float, float]:
+    """Force of one obstacle on a disc it cuts into by `depth` along the outward normal n:
+    2k x depth, with damping and shear against the disc's own velocity."""
+    vn = -vx * nx - vy * ny
+    spring = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
+    fx = spring * depth * nx - prm[P_DAMPING] * vx + prm[P_SHEAR] * (-vx - vn * nx)
+    fy = spring * depth * ny - prm[P_DAMPING] * vy + prm[P_SHEAR] * (-vy - vn * ny)
+    return fx, fy
+
+
+@numba.njit(cache=True, inline="always")
+def _obstacle_force(
+    x: float, y: float, r: float, vx: float, vy: float, rects: FloatArray, circles: FloatArray,
+    prm: FloatArray,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Force of every obstacle a disc overlaps, each on its own (as the published code adds
+    them), and the sum of their magnitudes for the contact-force sum. A rectangle pushes out the
+    shortest way: off the nearest face, or radially off a corner."""
+    fx = 0.0
+    fy = 0.0
+    total = 0.0
+    for o in range(rects.shape[0]):
+        x1 = rects[o, 0]
+        x2 = rects[o, 1]
+        y1 = rects[o, 2]
+        y2 = rects[o, 3]
+        if x <= x1 - r or x >= x2 + r or y <= y1 - r or y >= y2 + r:
+            continue
+        dx = x - min(max(x, x1), x2)
+        dy = y - min(max(y, y1), y2)
+        d2 = dx * dx + dy * dy
+        if d2 > 0.0:
+            if d2 >= r * r:
+                continue
+            d = math.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            depth = r - d
+        else:
+            # Centre inside: out through the nearest face.
+            left = x - x1
+            right = x2 - x
+            below = y - y1
+            above = y2 - y
+            least = min(min(left, right), min(below, above))
+            depth = least + r
+            nx = -1.0 if least == left else (1.0 if least == right else 0.0)
+            ny = 0.0 if nx != 0.0 else (-1.0 if least == below else 1.0)
+        px, py = _wall_push(nx, ny, depth, vx, vy, prm)
+        fx += px
+        fy += py
+        total += math.sqrt(px * px + py * py)
+    for o in range(circles.shape[0]):
+        dx = x - circles[o, 0]
+        dy = y - circles[o, 1]
+        reach = r + circles[o, 2]
+        d2 = dx * dx + dy * dy
+        if d2 < reach * reach and d2 > 0.0:
+            d = math.sqrt(d2)
+            px, py = _wall_push(dx / d, dy / d, reach - d, vx, vy, prm)
+            fx += px
+            fy += py
+            total += math.sqrt(px * px + py * py)
+    return fx, fy, total
+
+
+@numba.njit(cache=True, inline="always")
+def _friction(
+    vx: float, vy: float, fx: float, fy: float, inv_mass: float, slide: float, static: float,
+    prm: FloatArray,
+) -> tuple[float, float]:  # fmt: skip
+    """The new velocity: static friction holds a body at rest below its threshold, then
+    v += F / m dt, then sliding friction takes slide x dt off the speed (to zero at most)."""
+    dt = prm[P_DT]
+    rest = prm[P_REST_SPEED]
+    if vx * vx + vy * vy < rest * rest and fx * fx + fy * fy < static * static:
+        fx = 0.0
+        fy = 0.0
+    vx += fx * inv_mass * dt
+    vy += fy * inv_mass * dt
+    speed = math.sqrt(vx * vx + vy * vy)
+    slow = slide * dt
+    if speed < slow:
+        return 0.0, 0.0
+    scale = 1.0 - slow / speed
+    return vx * scale, vy * scale
+
+
+# ---- the passes of a step (each over particles lo..hi) -----------------------------------------
+
+
+@numba.njit(cache=True)
+def _kinematics(
+    lo: int, hi: int, step: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    prm: FloatArray,
+) -> float:  # fmt: skip
+    """First pass: joins from the last step take effect, the servo moves the radius (from the
+    last step's force sums, which are then cleared), positions advance by the old velocity, walls
+    reflect, and the velocity is kept in vel_old for the force passes. Returns the largest
+    squared displacement since the last list build."""
+    dt = prm[P_DT]
+    wall = prm[P_HALF_WIDTH]
+    worst = 0.0
+    for i in range(lo, hi):
+        if flags[F_JOINED, i]:
+            flags[F_JOINED, i] = 0
+            flags[F_KIND, i] = MEMBER
+            flags[F_ACTING, i] = flags[F_ALIVE, i] & (1 - flags[F_HELD, i])
+        r = body[B_R, i]
+        if flags[F_ACTING, i]:
+            target = targets[step, ext[i]]
+            if not math.isnan(target):  # NaN: the controller lets the servo hold
+                r = _servo(r, target, body[B_FR, i], body[B_FA, i], prm)
+                body[B_R, i] = r
+        body[B_FR, i] = 0.0
+        body[B_FA, i] = 0.0
+        body[B_FX, i] = 0.0
+        body[B_FY, i] = 0.0
+        x = pos[0, i] + vel[0, i] * dt
+        y = pos[1, i] + vel[1, i] * dt
+        if x > wall - r:
+            x = wall - r
+            vel[0, i] = -vel[0, i]
+        elif x < r - wall:
+            x = r - wall
+            vel[0, i] = -vel[0, i]
+        if y > wall - r:
+            y = wall - r
+            vel[1, i] = -vel[1, i]
+        elif y < r - wall:
+            y = r - wall
+            vel[1, i] = -vel[1, i]
+        pos[0, i] = x
+        pos[1, i] = y
+        vel_old[0, i] = vel[0, i]
+        vel_old[1, i] = vel[1, i]
+        dx = x - ref[0, i]
+        dy = y - ref[1, i]
+        worst = max(worst, dx * dx + dy * dy)
+    return worst
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pair(
+    i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
+    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    prm: FloatArray,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """One pair (j > i, rel = pj - pi): contact (spring, dashpot, shear) when they overlap, else
+    the magnets within the cutoff. j gets -f and |f| in its sum at once; returns what i gets
+    (f and its contact and attraction magnitudes). A free particle touching a member is marked
+    to join the robot."""
+    c = ri + body[B_R, j]
+    reach = c + prm[P_CUTOFF]
+    if d2 >= reach * reach or d2 == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    nx = dx / d
+    ny = dy / d
+    contact = 0.0
+    attract = 0.0
+    if d < c:
+        px, py = _contact(
+            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
+        )
+        contact = math.sqrt(px * px + py * py)
+        body[B_FR, j] += contact
+        touching = True
+    else:
+        strength = magi * body[B_MAG, j]
+        px = 0.0
+        py = 0.0
+        if strength > 0.0:
+            attract = _magnet(d - c, strength, prm)
+            px = attract * nx
+            py = attract * ny
+            body[B_FA, j] += attract
+        touching = d - c < prm[P_TOUCH_GAP]
+    body[B_FX, j] -= px
+    body[B_FY, j] -= py
+    if touching and kind_i != flags[F_KIND, j]:
+        if kind_i == FREE and flags[F_KIND, j] == MEMBER:
+            flags[F_JOINED, i] = 1
+        elif kind_i == MEMBER and flags[F_KIND, j] == FREE:
+            flags[F_JOINED, j] = 1
+    return px, py, contact, attract
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+) -> None:  # fmt: skip
+    """Second pass: every listed pair (i in lo..hi, j > i) once, from the new positions and old
+    velocities; i gets f and j gets -f, both get |f| in their contact or attraction sum."""
+    for i in range(lo, hi):
+        xi = pos[0, i]
+        yi = pos[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
+        ri = body[B_R, i]
+        magi = body[B_MAG, i]
+        kind_i = flags[F_KIND, i]
+        fx = 0.0
+        fy = 0.0
+        f_contact = 0.0
+        f_attract = 0.0
+        for k in range(ncount[i]):
+            j = nbr[i, k]
+            dx = pos[0, j] - xi
+            dy = pos[1, j] - yi
+            px, py, contact, attract = _pair(
+                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
+                flags, prm,
+            )  # fmt: skip
+            fx += px
+            fy += py
+            f_contact += contact
+            f_attract += attract
+        body[B_FX, i] += fx
+        body[B_FY, i] += fy
+        body[B_FR, i] += f_contact
+        body[B_FA, i] += f_attract
+
+
+@numba.njit(cache=True)
+def _settle(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
+    prm: FloatArray,
+) -> None:  # fmt: skip
+    """Third pass: obstacles and passive objects act on particles lo..hi (what the particles do
+    to object m goes to acc[m]), then every particle's velocity with ground friction."""
+    spring = prm[P_SPRING]
+    cutoff = prm[P_CUTOFF]
+    slide = prm[P_FRICTION]
+    static = prm[P_STATIC]
+    acc[:, :] = 0.0
+    check_obstacles = rects.shape[0] + circles.shape[0] > 0
+    for i in range(lo, hi):
+        xi = pos[0, i]
+        yi = pos[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
+        ri = body[B_R, i]
+        fx = body[B_FX, i]
+        fy = body[B_FY, i]
+        if check_obstacles:
+            px, py, size = _obstacle_force(xi, yi, ri, vxi, vyi, rects, circles, prm)
+            fx += px
+            fy += py
+            body[B_FR, i] += size
+        for m in range(objects.shape[0]):
+            dx = objects[m, O_X] - xi
+            dy = objects[m, O_Y] - yi
+            c = ri + objects[m, O_R]
+            d2 = dx * dx + dy * dy
+            reach = c + cutoff
+            if d2 >= reach * reach or d2 == 0.0:
+                continue
+            d = math.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            if d < c:
+                dvx = objects[m, O_VX] - vxi
+                dvy = objects[m, O_VY] - vyi
+                px, py = _contact(nx, ny, c - d, spring, dvx, dvy, prm)
+                body[B_FR, i] += math.sqrt(px * px + py * py)
+            else:
+                strength = body[B_MAG, i] * objects[m, O_MAG]
+                if strength <= 0.0:
+                    continue
+                pull = _magnet(d - c, strength, prm)
+                px = pull * nx
+                py = pull * ny
+                body[B_FA, i] += pull
+            fx += px
+            fy += py
+            acc[m, 0] -= px
+            acc[m, 1] -= py
+        vel[0, i], vel[1, i] = _friction(vxi, vyi, fx, fy, 1.0, slide, static, prm)
+
+
+@numba.njit(cache=True)
+def _objects_move(objects: FloatArray, prm: FloatArray) -> None:
+    """Passive objects' positions from their velocities, reflected by the walls."""
+    dt = prm[P_DT]
+    wall = prm[P_HALF_WIDTH]
+    for m in range(objects.shape[0]):
+        r = objects[m, O_R]
+        for axis, speed in ((O_X, O_VX), (O_Y, O_VY)):
+            value = objects[m, axis] + objects[m, speed] * dt
+            if value > wall - r:
+                value = wall - r
+                objects[m, speed] = -objects[m, speed]
+            elif value < r - wall:
+                value = r - wall
+                objects[m, speed] = -objects[m, speed]
+            objects[m, axis] = value
+
+
+@numba.njit(cache=True)
+def _objects_settle(
+    objects: FloatArray, acc: FloatArray, rects: FloatArray, circles: FloatArray, prm: FloatArray
+) -> None:
+    """Passive objects' velocities from the particles' pushes (acc, summed over chunks in
+    order), each other, obstacles and their own friction."""
+    count = objects.shape[0]
+    fxs = np.zeros(count)
+    fys = np.zeros(count)
+    for m in range(count):
+        for c in range(acc.shape[0]):
+            fxs[m] += acc[c, m, 0]
+            fys[m] += acc[c, m, 1]
+        xm = objects[m, O_X]
+        ym = objects[m, O_Y]
+        vxm = objects[m, O_VX]
+        vym = objects[m, O_VY]
+        rm = objects[m, O_R]
+        for n in range(count):
+            if n == m:
+                continue
+            dx = objects[n, O_X] - xm
+            dy = objects[n, O_Y] - ym
+            c = rm + objects[n, O_R]
+            d = math.sqrt(dx * dx + dy * dy)
+            if d == 0.0 or d >= c + prm[P_CUTOFF]:
+                continue
+            nx = dx / d
+            ny = dy / d
+            if d < c:
+                dvx = objects[n, O_VX] - vxm
+                dvy = objects[n, O_VY] - vym
+                px, py = _contact(nx, ny, c - d, prm[P_SPRING], dvx, dvy, prm)
+            else:
+                strength = objects[m, O_MAG] * objects[n, O_MAG]
+                pull = _magnet(d - c, strength, prm) if strength > 0.0 else 0.0
+                px = pull * nx
+                py = pull * ny
+            fxs[m] += px
+            fys[m] += py
+        px, py, _ = _obstacle_force(xm, ym, rm, vxm, vym, rects, circles, prm)
+        fxs[m] += px
+        fys[m] += py
+    for m in range(count):
+        vx, vy = _friction(
+            objects[m, O_VX], objects[m, O_VY], fxs[m], fys[m], objects[m, O_INV_MASS],
+            objects[m, O_FRICTION], objects[m, O_STATIC], prm,
+        )  # fmt: skip
+        objects[m, O_VX] = vx
+        objects[m, O_VY] = vy
+
+
+# ---- neighbour lists ---------------------------------------------------------------------------
+
+
+@numba.njit(cache=True)
+def _grid(pos: FloatArray, radius: float) -> tuple[int, int, IntArray, IntArray, IntArray]:
+    """Bins particles into square cells at least `radius` wide over their bounding box (wider
+    when needed to keep at most ~2 cells per particle). Returns the grid's shape, each
+    particle's cell (row-major), the cells' start offsets and the particles cell by cell (a
+    stable counting sort: index order within a cell)."""
+    n = pos.shape[1]
+    x0 = pos[0, 0]
+    x1 = x0
+    y0 = pos[1, 0]
+    y1 = y0
+    for i in range(n):
+        x0 = min(x0, pos[0, i])
+        x1 = max(x1, pos[0, i])
+        y0 = min(y0, pos[1, i])
+        y1 = max(y1, pos[1, i])
+    width = x1 - x0 + radius
+    height = y1 - y0 + radius
+    size = max(radius, math.sqrt(width * height / (2.0 * n + 64.0)))
+    ncx = int(width / size) + 1
+    ncy = int(height / size) + 1
+    cells = np.empty(n, dtype=np.int64)
+    start = np.zeros(ncx * ncy + 1, dtype=np.int64)
+    for i in range(n):
+        c = int((pos[1, i] - y0) / size) * ncx + int((pos[0, i] - x0) / size)
+        cells[i] = c
+        start[c + 1] += 1
+    for c in range(ncx * ncy):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    members = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        members[fill[cells[i]]] = i
+        fill[cells[i]] += 1
+    return ncx, ncy, cells, start, members
+
+
+@numba.njit(cache=True)
+def _fill_lists(
+    lo: int, hi: int, pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    radius: float, nbr: ListArray, ncount: npt.NDArray[np.int32],
+) -> int:  # fmt: skip
+    """Half lists of particles lo..hi, the particles being in cell order: the later ones of its
+    own cell and the cell to its right (one run of indices), then the three cells above (another
+    run). Returns the longest list found, which may exceed nbr's width (then redo wider)."""
+    # Branch-free: every candidate is written at the list's end and kept only if close (the
+    # test is a coin toss a branch predictor loses); the last column is that scratch slot.
+    width = nbr.shape[1] - 1
+    longest = 0
+    r2 = radius * radius
+    for i in range(lo, hi):
+        cx = cells[i] % ncx
+        cy = cells[i] // ncx
+        xi = pos[0, i]
+        yi = pos[1, i]
+        count = 0
+        row = cy * ncx
+        right = min(cx + 1, ncx - 1)
+        for j in range(i + 1, start[row + right + 1]):
+            dx = pos[0, j] - xi
+            dy = pos[1, j] - yi
+            nbr[i, min(count, width)] = j
+            count += dx * dx + dy * dy < r2
+        if cy + 1 < ncy:
+            above = row + ncx
+            for j in range(start[above + max(cx - 1, 0)], start[above + right + 1]):
+                dx = pos[0, j] - xi
+                dy = pos[1, j] - yi
+                nbr[i, min(count, width)] = j
+                count += dx * dx + dy * dy < r2
+        ncount[i] = min(count, width)
+        longest = max(longest, count)
+    return longest
+
+
+@numba.njit(parallel=True, cache=True)
+def _fill_chunks(
+    bounds: IntArray, pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    radius: float, nbr: ListArray, ncount: npt.NDArray[np.int32],
+) -> int:  # fmt: skip
+    """_fill_lists over every chunk in parallel; the longest list found."""
+    chunks = bounds.shape[0] - 1
+    longest = np.zeros(chunks, dtype=np.int64)
+    for c in numba.prange(chunks):
+        longest[c] = _fill_lists(
+            bounds[c], bounds[c + 1], pos, cells, start, ncx, ncy, radius, nbr, ncount
+        )
+    most = 0
+    for c in range(chunks):
+        most = max(most, longest[c])
+    return most
+
+
+@numba.njit(cache=True)
+def _permute(rows: npt.NDArray, order: IntArray) -> None:
+    """rows[:, p] = rows[:, order[p]] for every p, through a scratch copy."""
+    scratch = rows.copy()
+    for r in range(rows.shape[0]):
+        for p in range(rows.shape[1]):
+            rows[r, p] = scratch[r, order[p]]
+
+
+@numba.njit(cache=True)
+def _row_bounds(start: IntArray, ncx: int, ncy: int, bounds: IntArray) -> None:
+    """Chunk bounds on grid-row boundaries, about equal in particles; with fewer rows than
+    chunks the last chunks are empty. A chunk's pairs then reach no further than the next."""
+    chunks = bounds.shape[0] - 1
+    n = start[ncx * ncy]
+    bounds[0] = 0
+    c = 1
+    for row in range(1, ncy):
+        if c >= chunks:
+            break
+        offset = start[row * ncx]
+        if offset >= c * n // chunks and offset > bounds[c - 1]:
+            bounds[c] = offset
+            c += 1
+    for rest in range(c, chunks + 1):
+        bounds[rest] = n
+
+
+@numba.njit(cache=True)
+def _prepare(
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, ext: IntArray, bounds: IntArray, prm: FloatArray, sort: bool,
+) -> tuple[int, int, IntArray, IntArray]:  # fmt: skip
+    """The first half of a list build: grid the particles, put them in grid-cell order when
+    `sort` (every per-particle row and `ext` follow; without it they must already be in that
+    order, as after a restore from the lists' reference positions), make the positions the
+    lists' reference and re-cut the chunk bounds on grid rows. Returns the grid (shape, each
+    particle's cell, the cells' start offsets)."""
+    n = pos.shape[1]
+    ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
+    if sort:
+        _permute(pos, members)
+        _permute(vel, members)
+        _permute(body, members)
+        _permute(flags, members)
+        _permute(ext.reshape(1, n), members)
+        _permute(cells.reshape(1, n), members)  # the same grid, now in cell order
+        vel_old[:, :] = vel
+    for i in range(n):
+        ref[0, i] = pos[0, i]
+        ref[1, i] = pos[1, i]
+    _row_bounds(start, ncx, ncy, bounds)
+    return ncx, ncy, cells, start
+
+
+@numba.njit(cache=True)
+def _fill(
+    pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int, nbr: ListArray,
+    ncount: npt.NDArray[np.int32], bounds: IntArray, prm: FloatArray,
+) -> ListArray:  # fmt: skip
+    """The second half: the half lists, in a wider array if some list did not fit."""
+    radius = prm[P_LIST_RADIUS]
+    n = pos.shape[1]
+    while True:
+        if bounds.shape[0] == 2:
+            need = _fill_lists(0, n, pos, cells, start, ncx, ncy, radius, nbr, ncount)
+        else:
+            need = _fill_chunks(bounds, pos, cells, start, ncx, ncy, radius, nbr, ncount)
+        if need < nbr.shape[1]:
+            return nbr
+        nbr = np.empty((n, need + 5), dtype=np.int32)
+
+
+@numba.njit(cache=True)
+def build_lists(
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32],
+    bounds: IntArray, prm: FloatArray, sort: bool,
+) -> ListArray:  # fmt: skip
+    """Rebuilds the half neighbour lists from the current positions (see _prepare). Returns the
+    lists' array (a wider one if some list did not fit)."""
+    ncx, ncy, cells, start = _prepare(pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort)
+    return _fill(pos, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
+
+
+# ---- the step loop ----------------------------------------------------------------------------
+
+
+@numba.njit(parallel=True, cache=True)
+def _kinematics_chunks(
+    bounds: IntArray, step: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    prm: FloatArray,
+) -> float:  # fmt: skip
+    """_kinematics over every chunk in parallel; the largest squared displacement."""
+    chunks = bounds.shape[0] - 1
+    worst = np.zeros(chunks)
+    for c in numba.prange(chunks):
+        worst[c] = _kinematics(
+            bounds[c], bounds[c + 1], step, targets, ext, pos, ref, vel, vel_old, body, flags, prm
+        )
+    most = 0.0
+    for c in range(chunks):
+        most = max(most, worst[c])
+    return most
+
+
+@numba.njit(parallel=True, cache=True)
+def _pairs_chunks(
+    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs over the even (parity 0) or odd (1) chunks in parallel: they write only their own
+    chunk and the next, which no other chunk of the same parity touches."""
+    chunks = bounds.shape[0] - 1
+    for half in numba.prange((chunks - parity + 1) // 2):
+        c = 2 * half + parity
+        _pairs(bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, prm)
+
+
+@numba.njit(parallel=True, cache=True)
+def _settle_chunks(
+    bounds: IntArray, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
+    prm: FloatArray,
+) -> None:  # fmt: skip
+    """_settle over every chunk in parallel."""
+    for c in numba.prange(bounds.shape[0] - 1):
+        _settle(
+            bounds[c], bounds[c + 1], pos, vel_old, vel, body, rects, circles, objects, acc[c],
+            prm,
+        )  # fmt: skip
+
+
+@numba.njit(cache=True)
+def advance(
+    steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
+    vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
+    ncount: npt.NDArray[np.int32], rects: FloatArray, circles: FloatArray, objects: FloatArray,
+    acc: FloatArray, bounds: IntArray, prm: FloatArray,
+) -> tuple[ListArray, int]:  # fmt: skip
+    """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
+    chunk everything runs inline (no parallel region to start), with several in parallel.
+    Returns the neighbour lists' array (possibly a new, wider one) and how many times the lists
+    were rebuilt."""
+    n = pos.shape[1]
+    inline = bounds.shape[0] == 2
+    limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
+    rebuilds = 0
+    for s in range(steps):
+        if inline:
+            moved = _kinematics(0, n, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm)
+        else:
+            moved = _kinematics_chunks(
+                bounds, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm
+            )
+        _objects_move(objects, prm)
+        if moved > limit:
+            nbr = build_lists(
+                pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
+            )
+            rebuilds += 1
+        if inline:
+            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+        else:
+            _pairs_chunks(bounds, 0, pos, vel_old, body, flags, nbr, ncount, prm)
+            _pairs_chunks(bounds, 1, pos, vel_old, body, flags, nbr, ncount, prm)
+        if inline:
+            _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+        else:
+            _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
+        if objects.shape[0] > 0:
+            _objects_settle(objects, acc, rects, circles, prm)
+    return nbr, rebuilds

@@ -160,12 +160,7 @@ def _study(
         failed = {k: v for k, v in store.load_failures().items() if k in planned}
         return _report(study, options, specs, store, runner.name, failed)
     from particlebot.studies.engine import ClusterError, run_study
-    from particlebot.studies.seam import SimulatorUnavailableError
 
-    try:
-        runner.check()
-    except SimulatorUnavailableError as exc:
-        return fail(f"study {study.name}: {exc}")
     try:
         store.prepare()
         store.write_document(

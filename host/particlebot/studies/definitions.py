@@ -28,6 +28,11 @@ WALL_HALF_SPAN_DPD = 3.0
 swarm can reach by going round, so the gap is the only way through."""
 
 
+GAP_SHADOW = "last"
+"""SI S9: particles the obstacle hides from the light "oscillate at the end of the cycle, as if
+defining the lowest end of the signal gradient": the simulator's shadow mode LAST."""
+
+
 class StudyOptionError(ValueError):
     """A study option the user gave is wrong; the message is one line, naming the option."""
 
@@ -207,6 +212,7 @@ def _gap_world(
         lamp_x=lamp_x,
         placement=options.placement,
         rects=wall,
+        shadow=GAP_SHADOW,
     )
     return setup, GapPassage(wall_far_x=far)
 

@@ -80,6 +80,9 @@ class WorldSetup:
     free_particles: int = 0
     """Loose particles scattered in free_region, which the robot may annex (Fig. S21)."""
     free_region: Rect | None = None
+    shadow: str = "ignore"
+    """What an obstacle between a particle and the lamp does: 'ignore', 'last' (the particle
+    reads no light and goes last in the wave: the gap study, SI S9) or 'still'."""
     controller: str = "published"
     noise_diameters: float = 0.0
     """The controller's distance-estimation error, sd in minimum particle diameters (Fig. S20)."""

@@ -74,7 +74,8 @@ def test_carrying_measures_the_object_and_whether_the_swarm_still_touches_it() -
     setup = WorldSetup(particles=2, seed=1, duration_s=60, lamp_x=10.0, passive_object=obj)
     radius = 4.0 * R_MIN_M
     t = np.array([0.0, 60.0])
-    touching = np.array([[3.0 - radius - 0.1, 0.0], [0.0, 5.0]])
+    # One particle touches the object at (3, 0); the swarm's centre is 0.5 m from where it began.
+    touching = np.array([[3.0 - radius - 0.1, 0.0], [-2.0 + radius + 0.1, 0.0]])
     result = ObjectCarry().evaluate(
         setup,
         outcome(t, np.array([9.0, 8.5]), touching, object_start=(2.0, 0.0), object_end=(3.0, 0.0)),

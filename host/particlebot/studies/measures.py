@@ -59,8 +59,9 @@ class GapPassage:
 @dataclass(frozen=True)
 class ObjectCarry:
     """Fig. S19: how far the passive object moved toward the lamp (m), how far the swarm's
-    centroid did, and whether the object is still touching the swarm at the end (1) or was left
-    behind or pushed off (0)."""
+    centroid did (from the initial centroid, the study frame's origin, to the particles' mean at
+    the end: the published CSV's centroid counts the object as a body too), and whether the
+    object is still touching the swarm at the end (1) or was left behind or pushed off (0)."""
 
     def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
         if (
@@ -73,11 +74,12 @@ class ObjectCarry:
         before = math.dist(outcome.object_start, lamp)
         after = math.dist(outcome.object_end, lamp)
         reach = setup.passive_object.radius_factor * R_MIN_M + R_MAX_M + 0.005
-        gaps = np.hypot(*(outcome.final_xy[: setup.particles] - np.asarray(outcome.object_end)).T)
-        distance = outcome.track.distance_m
+        swarm = outcome.final_xy[: setup.particles]
+        gaps = np.hypot(*(swarm - np.asarray(outcome.object_end)).T)
+        centre = swarm.mean(axis=0)
         return {
             "object_advance_m": before - after,
-            "swarm_advance_m": float(distance[0] - distance[-1]),
+            "swarm_advance_m": math.hypot(*lamp) - math.dist((centre[0], centre[1]), lamp),
             "object_carried": float(gaps.min() <= reach),
         }
 

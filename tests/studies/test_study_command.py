@@ -46,16 +46,6 @@ def test_bad_options_get_one_line_and_status_2(
     assert not (tmp_path / "r").exists()
 
 
-def test_without_the_simulator_a_study_says_so_and_writes_nothing(
-    capsys: pytest.CaptureFixture[str], tmp_path: Path
-) -> None:
-    code, _, err = run(["dead", "--quick", "--results", str(tmp_path / "r")], capsys)
-    assert code == 2
-    assert "simulator" in err and "nothing was run" in err
-    assert err.count("\n") == 1
-    assert not (tmp_path / "r").exists()
-
-
 def test_list_shows_the_plan_without_running(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:

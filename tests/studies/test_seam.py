@@ -70,6 +70,25 @@ def test_the_study_frame_is_the_simulators_moved_to_the_initial_centroid() -> No
     assert final[:, 0].max() < 0.6 - paper.R_MIN_M + 1e-3
 
 
+def test_published_numbers_changed_with_set_reach_the_world_and_the_controller() -> None:
+    study = STUDIES["dead"]
+    options = resolve(
+        study,
+        RawOptions(
+            sizes="10", seeds="1", overrides="static_factor=1, phase_noise=0, update_cycles=2"
+        ),
+    )
+    changed = study.specs(options)[0]
+    plain = study.specs(replace(options, overrides=()))[0]
+    assert changed.run_id != plain.run_id
+    scenario = seam.frame(changed.setup).scenario
+    assert scenario.physics == replace(PhysicsParams(), static_factor=1.0)
+    assert scenario.controller.published == PublishedSettings(phase_noise=0.0, update_cycles=2)
+    assert seam.frame(plain.setup).scenario.physics == PhysicsParams()
+    bool_set = replace(WALLED, overrides=(("constrain_contraction", 1.0),))
+    assert seam.frame(bool_set).scenario.physics.constrain_contraction is True
+
+
 def test_a_placement_that_cuts_into_an_obstacle_is_turned_until_it_clears() -> None:
     relative = place_swarm(seam.frame(WALLED).scenario).xy
     relative = relative - relative.mean(axis=0)

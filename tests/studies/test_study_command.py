@@ -34,6 +34,13 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
         (["dead", "--workers", "0"], "--workers: 0 is below 1"),
         (["dead", "--workers", "2", "--scheduler", "tcp://h:8786"], "--workers sizes the local"),
         (["noise", "--noise", "nan"], "--noise: nan is not a standard deviation"),
+        (["dead", "--set", "bogus=1"], "--set: 'bogus' is not a number of the model (attraction"),
+        (["dead", "--set", "shear"], "--set: expected NAME=VALUE, got 'shear'"),
+        (["dead", "--set", "shear=-1"], "--set: shear must be >= 0, not -1.0"),
+        (["dead", "--set", "shear=nan"], "--set: shear must be a finite number, not nan"),
+        (["dead", "--set", "r_min=0.1"], "--set: r_min is fixed in the studies"),
+        (["dead", "--set", "update_cycles=1.5"], "update_cycles must be a whole number >= 1"),
+        (["dead", "--set", "shear=20,shear=30"], "--set: shear given twice"),
     ],
 )
 def test_bad_options_get_one_line_and_status_2(

@@ -13,8 +13,9 @@ from __future__ import annotations
 import math
 import shutil
 import tempfile
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,6 +38,7 @@ from particlebot.sim.scenarios.scenario import (
 )
 from particlebot.sim.world.arena import Arena, Circle, Rect
 from particlebot.sim.world.light import ShadowMode
+from particlebot.sim.world.params import PhysicsParams
 from particlebot.studies.spec import PassiveObject as StudyObject
 from particlebot.studies.spec import Rect as StudyRect
 from particlebot.studies.spec import RunSpec, SimOutcome, Track, WorldSetup
@@ -106,15 +108,15 @@ def frame(setup: WorldSetup) -> Framed:
         controller = CONTROLLER_KINDS[setup.controller]
     except KeyError as exc:
         raise SetupError(f"the simulator has no {exc.args[0]!r} here") from None
+    physics, published = _overridden(setup)
     base = Scenario(
         name="study",
         swarm=SwarmSpec(particles=setup.particles, placement=placement_kind),
         seed=setup.seed,
         duration_s=setup.duration_s,
         shadow=shadow,
-        controller=ControllerSpec(
-            kind=controller, published=PublishedSettings(noise_diameters=setup.noise_diameters)
-        ),
+        physics=physics,
+        controller=ControllerSpec(kind=controller, published=published),
         dead=DeadSpec(count=setup.dead, at_s=setup.dead_at_s, detach=setup.detach_dead),
         output=OutputSpec(dump_interval_s=setup.dump_interval_s),
     )
@@ -144,6 +146,25 @@ def frame(setup: WorldSetup) -> Framed:
     scenario = replace(base, lamp=lamp, rects=rects, circles=circles, objects=objects, free=free)
     turned, positions = _clear(scenario, xy - (cx, cy), (cx, cy))
     return Framed(scenario, (cx, cy), turned, positions)
+
+
+def _overridden(setup: WorldSetup) -> tuple[PhysicsParams, PublishedSettings]:
+    """The world's numbers and the published controller's, with the setup's overrides."""
+    physics_fields = {f.name: f for f in fields(PhysicsParams)}
+    physics: dict[str, Any] = {}
+    controller: dict[str, Any] = {"noise_diameters": setup.noise_diameters}
+    for name, value in setup.overrides:
+        if name in physics_fields:
+            kind = physics_fields[name].type
+            physics[name] = bool(value) if kind in (bool, "bool") else value
+        elif name == "update_cycles":
+            controller[name] = round(value)
+        else:
+            controller[name] = value
+    try:
+        return PhysicsParams(**physics), PublishedSettings(**controller)
+    except (TypeError, ValueError) as exc:
+        raise SetupError(f"overrides {setup.overrides}: {exc}") from None
 
 
 def _rect(r: StudyRect, dx: float, dy: float) -> Rect:

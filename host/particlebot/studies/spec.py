@@ -88,6 +88,10 @@ class WorldSetup:
     """The controller's distance-estimation error, sd in minimum particle diameters (Fig. S20)."""
     dump_interval_s: float = 60.0
     """Rows of the centroid track (the published CSV's interval)."""
+    overrides: tuple[tuple[str, float], ...] = ()
+    """Published numbers changed for this run, (name, value) pairs: fields of the world's
+    PhysicsParams (static_factor, shear, magnet_cutoff, ...) and the published controller's
+    phase_noise and update_cycles (`particlebot study --set`)."""
 
 
 @dataclass(frozen=True)

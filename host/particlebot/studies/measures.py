@@ -91,13 +91,21 @@ class RobotAdvance:
     the lamp from the initial centroid (the study frame's origin), the angle between its
     displacement and the lamp's bearing, and its size relative to the particles it began with."""
 
+    centre: str = "founders"
+    """Whose centroid moves: 'founders', the robot's particles at the end that it began with
+    (free particles lie ahead of it, so annexing them would move an all-particle centroid
+    forward by where they lay, not by how the robot moved), or 'all' of the robot's particles."""
+
     def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
         xy = outcome.final_xy
         pairs = cKDTree(xy).query_pairs(CONTACT_M, output_type="ndarray")
         graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy),) * 2)
         _, labels = connected_components(graph, directed=False)
         robot = labels == np.bincount(labels).argmax()
-        centre = xy[robot].mean(axis=0)
+        moving = robot.copy()
+        if self.centre == "founders" and robot[: setup.particles].any():
+            moving[setup.particles :] = False
+        centre = xy[moving].mean(axis=0)
         lamp = np.array([setup.lamp_x, setup.lamp_y])
         advance = float(np.hypot(*lamp) - np.hypot(*(lamp - centre)))
         heading = math.degrees(math.atan2(centre[1], centre[0]) - math.atan2(lamp[1], lamp[0]))

@@ -34,13 +34,18 @@ def read(folder: Path, metric: str) -> Cells:
         rows = list(csv.DictReader(stream))
     if not rows:
         return cells
-    sweep = list(rows[0])[1]
+    sweep = list(rows[0])[1]  # the sweep's column, or "metric" for a study without one
     for row in rows:
         if row["metric"] != metric or not row["mean"]:
             continue
         sd = float(row["sd"]) if row["sd"] else math.nan
         cells[int(row["particles"])].append(
-            (float(row[sweep]), float(row["mean"]), sd, int(row["runs"]))
+            (
+                0.0 if sweep == "metric" else float(row[sweep]),
+                float(row["mean"]),
+                sd,
+                int(row["runs"]),
+            )
         )
     for row_cells in cells.values():
         row_cells.sort()
@@ -143,6 +148,56 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
     return paths
 
 
+def speed_figure(results: Path, out: Path) -> list[Path]:
+    """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
+    sizes it did not run, beside Table S3's 0 % column."""
+    points: dict[int, tuple[float, float, int]] = {}
+    for name in ("dead-1000", "speed-small"):
+        for n, cells in read(results / name, "speed_mm_s").items():
+            for value, mean, sd, runs in cells:
+                if value == 0.0:
+                    points[n] = (mean, sd, runs)
+    if not points:
+        return []
+    sizes = sorted(points)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
+    means = [points[n][0] for n in sizes]
+    sds = [0.0 if math.isnan(points[n][1]) else points[n][1] for n in sizes]
+    ax.plot(sizes, means, "o-", color="tab:blue", ms=4, label="ours (mean ± 1 sd over seeds)")
+    ax.fill_between(
+        sizes,
+        [m - s for m, s in zip(means, sds, strict=True)],
+        [m + s for m, s in zip(means, sds, strict=True)],
+        color="tab:blue",
+        alpha=0.2,
+        lw=0,
+    )
+    for n in sizes:
+        ax.annotate(f"{points[n][2]}", (n, points[n][0]), textcoords="offset points", xytext=(4, 6),
+                    fontsize=7, color="tab:blue")  # fmt: skip
+    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
+    ax.errorbar(
+        list(published), [c.mean for c in published.values()],
+        yerr=[c.sd for c in published.values()], fmt="s", mfc="white", color="k", ms=4.5,
+        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
+    )  # fmt: skip
+    ax.set_xscale("log")
+    ax.set_xlabel("particles")
+    ax.set_ylabel("speed toward the light (mm/s)")
+    ax.set_title(
+        "Speed against swarm size, 0 % dead (2 h, first 30 min left out; ours: seeds marked)",
+        fontsize=10,
+    )
+    ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out / "speed.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return [path]
+
+
 def gap_figure(results: Path, out: Path) -> list[Path]:
     ours: Cells = defaultdict(list)
     for name in ("gap-10", "gap-100"):
@@ -233,6 +288,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     for path in (
         dead_figures(args.results, args.out)
+        + speed_figure(args.results, args.out)
         + gap_figure(args.results, args.out)
         + noise_figure(args.results, args.out)
     ):

@@ -14,7 +14,7 @@ import numpy as np
 from particlebot.protocol import Method
 from particlebot.sim.particles.model.firmware import FirmwareController, FirmwareSettings
 from particlebot.sim.particles.model.static_view import StaticView
-from particlebot.virtual.light import Lamp, LightField
+from particlebot.sim.world.light import Lamp, LightField
 
 WORLD_STEP_S = 0.01
 R_MIN = 0.0775

@@ -19,8 +19,8 @@ from particlebot.calibration.photocells import (
 from particlebot.calibration.readings import Reading, Readings
 from particlebot.firmware.native import calibrated_reading
 from particlebot.fleet import PhotocellLaw
-from particlebot.virtual.light import Lamp, LightField
-from particlebot.virtual.photocells import Photocells
+from particlebot.sim.world.light import Lamp, LightField
+from particlebot.sim.world.photocells import Photocells
 
 LAMP_HEIGHT_CM = 28.0
 DISTANCES_CM = [20.0, 40.0, 70.0, 100.0]

@@ -16,7 +16,7 @@ from particlebot.calibration.readings import (
     read_readings,
     write_readings,
 )
-from particlebot.virtual.light import Lamp, LightField
+from particlebot.sim.world.light import Lamp, LightField
 
 HEADER = "id,distance_cm,A0,A1,A2,A3,A4,A5"
 

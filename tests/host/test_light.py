@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from particlebot.virtual.light import Lamp, LightField
+from particlebot.sim.world.light import Lamp, LightField
 
 
 def test_the_reference_point_under_the_lamp_reads_980_on_every_sensor() -> None:

@@ -22,7 +22,7 @@ from particlebot.calibration.photocells import (
 from particlebot.calibration.positions import PositionCheck
 from particlebot.calibration.readings import Readings
 from particlebot.calibration.servo import ServoTable
-from particlebot.virtual.light import SENSOR_COUNT
+from particlebot.sim.world.light import SENSOR_COUNT
 
 
 def _save(figure: Figure, path: Path) -> Path:

@@ -23,7 +23,7 @@ import numpy as np
 from particlebot.calibration.readings import Reading, Readings
 from particlebot.fleet import PHOTOCELL_UNITS, PhotocellLaw
 from particlebot.protocol import PARAM_SPECS, Param
-from particlebot.virtual.light import ADC_FULL_SCALE, SENSOR_COUNT
+from particlebot.sim.world.light import ADC_FULL_SCALE, SENSOR_COUNT
 
 GAMMA_PARAMS = tuple(Param(Param.SENSOR_GAMMA_0 + k) for k in range(SENSOR_COUNT))
 GAIN_PARAMS = tuple(Param(Param.SENSOR_GAIN_0 + k) for k in range(SENSOR_COUNT))

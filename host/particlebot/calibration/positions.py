@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from particlebot.calibration.photocells import CalibrationError, rho
 from particlebot.calibration.readings import Readings
-from particlebot.virtual.light import ADC_FULL_SCALE
+from particlebot.sim.world.light import ADC_FULL_SCALE
 
 
 def floor_distance_cm(

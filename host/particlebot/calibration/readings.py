@@ -20,7 +20,7 @@ from pathlib import Path
 
 from particlebot.fleet import FIRST_ID, LAST_ID
 from particlebot.protocol import Status
-from particlebot.virtual.light import ADC_FULL_SCALE, SENSOR_COUNT
+from particlebot.sim.world.light import ADC_FULL_SCALE, SENSOR_COUNT
 
 MAGIC = "# particlebot photocell readings"
 SENSOR_COLUMNS = tuple(f"A{k}" for k in range(SENSOR_COUNT))

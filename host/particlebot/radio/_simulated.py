@@ -9,8 +9,8 @@ from typing import Generic, Protocol, TypeVar
 from particlebot.options import POSITIVE, Bounds, OptionError, parse_float
 from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
 from particlebot.radio.faults import LinkFaults
-from particlebot.virtual.light import Lamp
-from particlebot.virtual.photocells import MAX_SPREAD
+from particlebot.sim.world.light import Lamp
+from particlebot.sim.world.photocells import MAX_SPREAD
 
 PHOTOCELL_SPREAD = Bounds(minimum=0, maximum=MAX_SPREAD)
 

@@ -36,8 +36,8 @@ from particlebot.protocol import (
 )
 from particlebot.sim.harness import CPU_HZ, ParticleSim, default_elf
 from particlebot.sim.medium import BASE, BAUD, DEFAULT_BUFFER_BYTES, NOISE, AirPacket, Medium
-from particlebot.virtual.light import ADC_FULL_SCALE, Lamp, LightField
-from particlebot.virtual.photocells import Photocells
+from particlebot.sim.world.light import ADC_FULL_SCALE, Lamp, LightField
+from particlebot.sim.world.photocells import Photocells
 
 AVCC_MV = 3300
 PACED_STEP_S = 0.01

@@ -12,9 +12,9 @@ import numpy as np
 
 from particlebot.pacing import Paced, PacedRunner
 from particlebot.protocol import BASE_STATION_ID, UNASSIGNED_ID, SetId, encode_frame
+from particlebot.sim.world.light import Lamp, LightField
+from particlebot.sim.world.photocells import Photocells
 from particlebot.virtual.air import VirtualAir
-from particlebot.virtual.light import Lamp, LightField
-from particlebot.virtual.photocells import Photocells
 
 STEP_MS = 5  # the C API wants a tick at least every 5 ms for 20 ms servo steps
 STEP_S = STEP_MS / 1000

@@ -20,7 +20,7 @@ from particlebot.sim.particles.model.firmware import (
     noisy_readings,
 )
 from particlebot.sim.particles.model.static_view import StaticView
-from particlebot.virtual.light import LightField
+from particlebot.sim.world.light import LightField
 from tests.firmware.conftest import DIAMETER_M, Bench, reading_on_floor
 
 WORLD_STEP_MS = 10

@@ -55,7 +55,9 @@ class WorldView(Protocol):
 
     def acting(self) -> BoolArray:
         """True where a particle may actuate now: alive, attached, and not held still by shadow
-        mode 2. The world holds the others at R_min whatever a controller commands."""
+        mode 2. The world ignores what a controller commands the others: their radius stays
+        where it is (the published model: a dead particle keeps the radius it died with; a free
+        particle waits contracted)."""
 
 
 class Controller(ABC):
@@ -64,8 +66,10 @@ class Controller(ABC):
     The world calls bind() once before the first step, then command() every step with the view
     of that step. command() writes radii in metres into `out` (shape (N,), float64); the world
     clamps them to [r_min, r_max] and then applies the servo's stall limit, so a controller says
-    what the servo is told, not where the body ends up. Controllers draw randomness only from
-    the generator bind() gives, so a run is reproduced by its seed.
+    what the servo is told, not where the body ends up. NaN tells a servo to hold where it is
+    (the published controller's rest). Controllers draw randomness only from the generator
+    bind() gives, so a run is reproduced by its seed; the world pickles a controller into its
+    snapshots, so its state must pickle (plain attributes and numpy arrays do).
     """
 
     @abstractmethod
@@ -75,6 +79,16 @@ class Controller(ABC):
     @abstractmethod
     def command(self, view: WorldView, out: FloatArray) -> None:
         """Writes every particle's commanded radius (m) for the step at view.t into out."""
+
+    def command_ahead(self, view: WorldView, dt: float, out: FloatArray) -> int:
+        """Optional fast path: fills out[j] (out has shape (k, N)) with the commands of the steps
+        at view.t + j dt for as many rows as it can without sensing the world again, and returns
+        how many (row 0 is this step, sensed through `view` as command() would). The world then
+        runs those steps in one compiled call, which is what makes small swarms fast. Results must
+        not depend on how the world cuts a run into blocks: compute step j's time as
+        (round(view.t / dt) + j) x dt. The default, 0, means "not supported": command() is called
+        every step."""
+        return 0
 
     def phase(self, view: WorldView) -> FloatArray:
         """Where each particle is in its cycle, 0..1 (NaN where it is not cycling); pictures colour

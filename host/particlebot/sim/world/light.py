@@ -1,14 +1,15 @@
-"""Light a lamp casts on six photocells: inverse-square law and the SI's eq. 11 voltage divider."""
+"""The lamp and its light: inverse-square law, the SI's eq. 11 divider, and shadow modes."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import IntEnum
 
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.virtual.photocells import Photocells
+from particlebot.sim.world.photocells import Photocells
 
 ADC_FULL_SCALE = 1023
 SENSOR_COUNT = 6
@@ -16,6 +17,17 @@ LOAD_OHM = 1.5e6  # R_R of SI section S3
 # The SI's reference reading: 980 at r_x = 28 cm, directly under the lamp.
 REFERENCE_DISTANCE_M = 0.28
 REFERENCE_VALUE = 980
+
+
+class ShadowMode(IntEnum):
+    """What an obstacle between a particle and the lamp does (the published simulator's modes)."""
+
+    IGNORE = 0
+    """Shadows are ignored: every particle sees the lamp."""
+    LAST = 1
+    """A shadowed particle reads no light and moves last in the wave."""
+    STILL = 2
+    """A shadowed particle reads no light and does not actuate."""
 
 
 @dataclass(frozen=True)
@@ -36,8 +48,8 @@ class LightField:
     point (eq. 13). The six cells face outwards 60 degrees apart; the one facing the lamp gets
     `direction_gain` more light (scaled by how sideways the light comes), so they differ a
     little, as real ones do, while directly under the lamp they agree. `photocells` gives each
-    particle's cells a gamma and a resistance of their own (particlebot.virtual.photocells);
-    without it every cell is the ideal one.
+    particle's cells a gamma and a resistance of their own (sim.world.photocells); without it
+    every cell is the ideal one.
     """
 
     def __init__(
@@ -71,6 +83,13 @@ class LightField:
     def reading(self, x: float, y: float) -> float:
         """V_n of eq. 11 for an ideal cell at (x, y), before rounding."""
         return float(self._divider(self._resistance(self.distance(x, y))))
+
+    def readings(
+        self, xs: npt.NDArray[np.float64], ys: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.float64]:
+        """V_n of eq. 11 for ideal cells at many positions, before rounding (the world's view)."""
+        r = np.sqrt((xs - self.lamp.x) ** 2 + (ys - self.lamp.y) ** 2 + self.lamp.height**2)
+        return self._divider(self._resistance(r))
 
     def sensor_values(
         self, x: float, y: float, heading: float = 0.0, *, particle: int = 0

@@ -1,6 +1,6 @@
 """How unlike one another simulated CdS photocells are: each cell's gamma (eq. 7) and resistance.
 
-The light model (particlebot.virtual.light) asks this module for one thing: a cell's resistance,
+The light model (particlebot.sim.world.light) asks this module for one thing: a cell's resistance,
 relative to the reference resistance R_x of SI eq. 13, under light that is `darkness` times
 dimmer than at the reference point. An ideal cell (eq. 8, gamma = 1) answers `darkness`; a real
 CdS cell follows R = factor * R_x * darkness^gamma, with its own gamma and its own factor. Those

@@ -1,0 +1,329 @@
+"""Where a swarm starts: SI Algorithm 5 (seeded, on a spatial hash), a line, a hexagonal blob, or
+positions given in a file."""
+
+from __future__ import annotations
+
+import csv
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+import numpy.typing as npt
+from scipy.spatial import cKDTree
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+# Angular margin (rad) added to every blocked arc of Algorithm 5's sweep, so that a particle swept
+# to the end of an arc clears the blocking one by ~0.15 nm instead of touching it to the last bit.
+_ARC_MARGIN_RAD = 1e-9
+# What the sweep adds when it jumps to an arc's end, so that it never stalls on rounding.
+_STEP_PAST_RAD = 1e-12
+# Non-overlapping discs of radius R whose centres lie within 4R of a centre: at most ~25 by area;
+# the sweep's buffer holds more than that.
+_ARC_BUFFER = 64
+# Two discs closer than their radii by more than this overlap (m); placements never do.
+OVERLAP_TOLERANCE_M = 1e-9
+
+
+class PlacementError(ValueError):
+    """Positions that cannot be used: overlapping discs, a damaged file, impossible sizes."""
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Centres (m) of every particle and, when the source gives them, their starting radii."""
+
+    xy: FloatArray
+    """(N, 2)"""
+    radii: FloatArray | None = None
+    """(N,), or None: every particle starts contracted."""
+
+    @property
+    def count(self) -> int:
+        return int(self.xy.shape[0])
+
+
+# ---- SI Algorithm 5 -------------------------------------------------------------------------
+
+
+@numba.njit(cache=True, inline="always")
+def _bucket(ix: int, iy: int, mask: int) -> int:
+    """The hash table's slot of grid cell (ix, iy): the swarm's extent is unbounded, the table
+    is not; cells sharing a slot only add candidates that the distance test then rejects."""
+    return int(((np.int64(ix) * 73856093) ^ (np.int64(iy) * 19349663)) & mask)
+
+
+@numba.njit(cache=True)
+def _algorithm5(
+    count: int, radius: float, x0: float, y0: float, rng: np.random.Generator
+) -> FloatArray:
+    """Algorithm 5 with an infinitely fine sweep, on a hashed grid of cells one diameter wide.
+
+    A chosen particle's free directions are found exactly: each placed neighbour closer than 4R
+    to it blocks an arc of directions (a new disc there would overlap that neighbour); the sweep
+    starts at the random angle and, while it sits inside a blocked arc, jumps to that arc's end.
+    A particle whose whole circle is blocked stays blocked (discs are only ever added), so it is
+    dropped from the list the next choice is drawn from: a uniform draw among the rest is what
+    the algorithm's "select again" loop amounts to, without drawing blocked particles again and
+    again inside a large swarm.
+    """
+    xy = np.empty((count, 2))
+    if count == 0:
+        return xy
+    two_pi = 2.0 * math.pi
+    diameter = 2.0 * radius
+    size = 1024
+    while size < 2 * count:
+        size *= 2
+    mask = size - 1
+    head = np.full(size, -1, dtype=np.int64)
+    chain = np.full(count, -1, dtype=np.int64)
+    active = np.empty(count, dtype=np.int64)
+    n_active = 0
+    arc_start = np.empty(_ARC_BUFFER)
+    arc_width = np.empty(_ARC_BUFFER)
+
+    placed = 0
+    x, y = x0, y0
+    while placed < count:
+        if placed == 1:
+            theta = two_pi * rng.random()
+            x = x0 + diameter * math.cos(theta)
+            y = y0 + diameter * math.sin(theta)
+        elif placed == 2:
+            # Tangent to both: on the perpendicular bisector of the first two, on a random side.
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            ux = (xy[1, 0] - xy[0, 0]) / diameter
+            uy = (xy[1, 1] - xy[0, 1]) / diameter
+            height = math.sqrt(3.0) * radius
+            x = 0.5 * (xy[0, 0] + xy[1, 0]) - side * uy * height
+            y = 0.5 * (xy[0, 1] + xy[1, 1]) + side * ux * height
+        elif placed > 2:
+            found = False
+            while not found:
+                pick = int(rng.random() * n_active)
+                k = active[pick]
+                theta = two_pi * rng.random()
+                cx, cy = xy[k, 0], xy[k, 1]
+                # Arcs blocked by the neighbours within 4R (cells of 2R: two rings around k's).
+                arcs = 0
+                ix = math.floor((cx - x0) / diameter)
+                iy = math.floor((cy - y0) / diameter)
+                for dx in range(-2, 3):
+                    for dy in range(-2, 3):
+                        j = head[_bucket(ix + dx, iy + dy, mask)]
+                        while j >= 0:
+                            if j != k:
+                                rx = xy[j, 0] - cx
+                                ry = xy[j, 1] - cy
+                                d = math.sqrt(rx * rx + ry * ry)
+                                if d < 2.0 * diameter:
+                                    half = math.acos(d / (2.0 * diameter)) + _ARC_MARGIN_RAD
+                                    arc_start[arcs] = math.atan2(ry, rx) - half
+                                    arc_width[arcs] = 2.0 * half
+                                    arcs += 1
+                            j = chain[j]
+                # Sweep counterclockwise from theta to the first direction no arc blocks.
+                swept = 0.0
+                moved = True
+                while moved and swept < two_pi:
+                    moved = False
+                    for a in range(arcs):
+                        into = (theta - arc_start[a]) % two_pi
+                        if into < arc_width[a]:
+                            # Just past the arc's end: landing on it exactly could leave theta
+                            # a rounding error inside, and the next pass would step by nothing.
+                            step = arc_width[a] - into + _STEP_PAST_RAD
+                            theta += step
+                            swept += step
+                            moved = True
+                if swept < two_pi:
+                    found = True
+                    x = cx + diameter * math.cos(theta)
+                    y = cy + diameter * math.sin(theta)
+                else:
+                    n_active -= 1
+                    active[pick] = active[n_active]
+        xy[placed, 0] = x
+        xy[placed, 1] = y
+        key = _bucket(math.floor((x - x0) / diameter), math.floor((y - y0) / diameter), mask)
+        chain[placed] = head[key]
+        head[key] = placed
+        active[n_active] = placed
+        n_active += 1
+        placed += 1
+    return xy
+
+
+def algorithm5(
+    count: int, radius: float, rng: np.random.Generator, at: tuple[float, float] = (0.0, 0.0)
+) -> Placement:
+    """SI Algorithm 5: the first disc at `at`, the second tangent to it in a random direction,
+    the third tangent to both, then each next one tangent to a randomly chosen placed disc, at
+    the first direction from a random start angle (swept counterclockwise) where it overlaps no
+    placed disc. Discs of `radius` (the contracted radius); reproducible from the generator."""
+    _check_count(count)
+    _check_positive("radius", radius)
+    _check_point("at", at)
+    return Placement(_algorithm5(count, float(radius), float(at[0]), float(at[1]), rng))
+
+
+# ---- regular placements ---------------------------------------------------------------------
+
+
+def line(
+    count: int,
+    spacing: float,
+    direction_deg: float = 0.0,
+    at: tuple[float, float] = (0.0, 0.0),
+) -> Placement:
+    """A straight line: the first centre at `at`, the next ones `spacing` apart along
+    `direction_deg` (counterclockwise from +x)."""
+    _check_count(count)
+    _check_positive("spacing", spacing)
+    _check_point("at", at)
+    if not math.isfinite(direction_deg):
+        raise PlacementError(f"direction must be a finite angle, not {direction_deg}")
+    angle = math.radians(direction_deg)
+    steps = np.arange(count, dtype=np.float64) * spacing
+    xy = np.column_stack((at[0] + steps * math.cos(angle), at[1] + steps * math.sin(angle)))
+    return Placement(xy)
+
+
+def hexagonal(count: int, spacing: float, at: tuple[float, float] = (0.0, 0.0)) -> Placement:
+    """A hexagonal blob: the first centre at `at`, then ring after ring around it (ring n holds
+    6n centres `spacing` apart, starting on +x and going counterclockwise, as the published
+    simulator's hex grid fills them); the last ring may be partly filled."""
+    _check_count(count)
+    _check_positive("spacing", spacing)
+    _check_point("at", at)
+    corners = np.array([[math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)] for k in range(7)])
+    points = [np.zeros((1, 2))]
+    total, ring = 1, 1
+    while total < count:
+        # Side k of ring n walks from corner k (n steps out) toward corner k + 1.
+        j = np.arange(ring, dtype=np.float64)[:, None]
+        sides = [corners[k] * (ring - j) + corners[k + 1] * j for k in range(6)]
+        points.append(np.concatenate(sides) * spacing)
+        total += 6 * ring
+        ring += 1
+    xy = np.concatenate(points)[:count] + np.asarray(at, dtype=np.float64)
+    return Placement(xy)
+
+
+# ---- positions from a file ------------------------------------------------------------------
+
+
+def from_file(path: Path) -> Placement:
+    """Centres (and optionally radii) from a CSV (columns x, y[, r], a header line optional) or
+    a TOML file (`particles = [[x, y], [x, y, r], ...]`), in metres."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise PlacementError(f"cannot read {path}: {exc}") from None
+    rows = _toml_rows(path, text) if path.suffix.lower() == ".toml" else _csv_rows(path, text)
+    if not rows:
+        raise PlacementError(f"{path}: no positions")
+    widths = {len(row) for row in rows}
+    if len(widths) != 1:
+        raise PlacementError(f"{path}: every position needs the same columns (x, y or x, y, r)")
+    table = np.asarray(rows, dtype=np.float64)
+    radii = table[:, 2].copy() if table.shape[1] == 3 else None
+    if radii is not None and not (radii > 0).all():
+        raise PlacementError(f"{path}: radius {radii[~(radii > 0)][0]:g} is not positive")
+    return Placement(np.ascontiguousarray(table[:, :2]), radii)
+
+
+def _csv_rows(path: Path, text: str) -> list[list[float]]:
+    rows: list[list[float]] = []
+    for line_no, cells in enumerate(csv.reader(text.splitlines()), start=1):
+        cells = [c.strip() for c in cells]
+        if not cells or not any(cells) or cells[0].startswith("#"):
+            continue
+        if line_no == 1 and not _is_number(cells[0]):
+            if [c.lower() for c in cells] not in (["x", "y"], ["x", "y", "r"]):
+                raise PlacementError(f"{path}:1: the header must be 'x, y' or 'x, y, r'")
+            continue
+        rows.append(_position(path, line_no, cells))
+    return rows
+
+
+def _toml_rows(path: Path, text: str) -> list[list[float]]:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise PlacementError(f"{path}: {exc}") from None
+    entries = data.get("particles")
+    if not isinstance(entries, list):
+        raise PlacementError(f"{path}: needs `particles = [[x, y], ...]`")
+    rows = []
+    for number, entry in enumerate(entries, start=1):
+        if not isinstance(entry, list):
+            raise PlacementError(f"{path}: particle {number} is not a list [x, y] or [x, y, r]")
+        rows.append(_position(path, None, [str(v) for v in entry], number))
+    return rows
+
+
+def _position(path: Path, line_no: int | None, cells: list[str], number: int = 0) -> list[float]:
+    where = f"{path}:{line_no}" if line_no is not None else f"{path}: particle {number}"
+    if len(cells) not in (2, 3):
+        raise PlacementError(f"{where}: needs x, y or x, y, r, not {len(cells)} values")
+    values = []
+    for cell in cells:
+        try:
+            value = float(cell)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            raise PlacementError(f"{where}: {cell!r} is not a finite number")
+        values.append(value)
+    return values
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+# ---- checks ---------------------------------------------------------------------------------
+
+
+def overlaps(xy: FloatArray, radii: FloatArray | float) -> tuple[int, int] | None:
+    """The first pair of discs that overlap by more than OVERLAP_TOLERANCE_M, or None."""
+    count = len(xy)
+    if count < 2:
+        return None
+    r = np.broadcast_to(np.asarray(radii, dtype=np.float64), (count,))
+    tree = cKDTree(xy)
+    pairs = tree.query_pairs(2.0 * float(r.max()), output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    i, j = pairs[:, 0], pairs[:, 1]
+    gap = np.hypot(*(xy[i] - xy[j]).T) - r[i] - r[j]
+    bad = np.flatnonzero(gap < -OVERLAP_TOLERANCE_M)
+    if len(bad) == 0:
+        return None
+    first = bad[np.lexsort((j[bad], i[bad]))[0]]
+    return int(i[first]), int(j[first])
+
+
+def _check_count(count: int) -> None:
+    if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 1:
+        raise PlacementError(f"a placement needs a whole number of particles >= 1, not {count}")
+
+
+def _check_positive(name: str, value: float) -> None:
+    if not (math.isfinite(value) and value > 0):
+        raise PlacementError(f"{name} must be a number > 0, not {value}")
+
+
+def _check_point(name: str, point: tuple[float, float]) -> None:
+    if len(point) != 2 or not all(math.isfinite(v) for v in point):
+        raise PlacementError(f"{name} must be two finite numbers (x, y), not {point}")

@@ -1,0 +1,104 @@
+"""The world's physical constants: the published simulator's numbers as defaults, in one place."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+# Units throughout the world: metres, seconds, and particle masses of 1 (a force is an
+# acceleration of a particle).
+
+ATTRACTION_FITTED = 1.5884e-5
+"""A of F = A / gap^2 (N m^2) as the published model fits it: 4.4 N at a 1.9 mm gap, close to the
+4.5 N peak adhesion of SI S7. The published main multiplies it by 3 for its studies."""
+
+
+@dataclass(frozen=True)
+class PhysicsParams:
+    """Every number of the published model (richa-batra/ParticleRobotSimulations, read as facts),
+    plus the few of our own, each marked as a deviation where the published model has none."""
+
+    dt: float = 0.01
+    """Time step (s); semi-implicit Euler, positions first."""
+    r_min: float = 0.0775
+    """Contracted radius (m)."""
+    r_max: float = 0.1175
+    """Fully expanded radius (m)."""
+
+    spring: float = 1000.0
+    """Contact stiffness k (N/m per unit mass): force k x overlap along the line of centres."""
+    damping: float = 10.0
+    """Contact dashpot on the WHOLE relative velocity (1/s), as published (not its normal part)."""
+    shear: float = 40.0
+    """Extra damping of the tangential relative velocity in contact (1/s)."""
+    obstacle_spring_factor: float = 2.0
+    """Obstacles push back with this x spring (the published 2k)."""
+
+    attraction: float = 3 * ATTRACTION_FITTED
+    """A of F = A / gap^2 (N m^2): the published main's 3 x the fitted value."""
+    magnet_clamp_force: float = 2.5
+    """Magnet force (N) below clamp_gap: the published clamp against F -> infinity at contact."""
+    clamp_gap: float = 0.9e-3
+    """Gap (m) below which the magnet force is the clamp."""
+    blend_gap: float = 1.9e-3
+    """Gap (m) where the linear blend from the clamp reaches A / gap^2."""
+    magnet_cutoff: float = 0.05
+    """DEVIATION: magnets act only across gaps below this (m). The published code reaches every
+    particle in a 5 x 5 block of cells 2 R_max wide (0.47-0.7 m, not isotropic); README measures
+    what the cutoff changes. math.inf is not allowed: use 0.6 for the published reach."""
+
+    mu: float = 0.4
+    """Ground friction coefficient."""
+    gravity: float = 9.81 * 0.566
+    """Effective g (m/s^2) of the friction law: the published 9.81 x 0.566."""
+    static_factor: float = 2.0
+    """A particle at rest stays put while |F| < static_factor x mu x g (the published 2)."""
+    rest_speed: float = 1e-6
+    """Below this speed (m/s) a particle counts as at rest for static friction."""
+
+    max_speed: float = 0.1
+    """Servo: growth per step is capped at max_speed x r_max / r x dt (m)."""
+    torque_limit: float = 0.5
+    """Servo: the stall torque C; growth stops when the contact-force sum reaches C / r."""
+    constrain_contraction: bool = False
+    """Servo: contraction resisted by the magnets' pull (published option, off by default)."""
+    contraction_coefficient: float = 10.0
+    """Servo: Cc of the constrained contraction."""
+
+    half_width: float = 64.0
+    """Reflective walls at +-half_width (m), the published world."""
+
+    skin: float = 0.02
+    """Neighbour lists (ours): pairs within 2 r_max + magnet_cutoff + skin are listed, and the
+    list is rebuilt when a body has moved skin / 2 since the last build. No effect on results
+    beyond the order of floating-point sums."""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool):
+                continue
+            if not (isinstance(value, float | int) and math.isfinite(value)):
+                raise ValueError(f"{f.name} must be a finite number, not {value!r}")
+            if value < 0:
+                raise ValueError(f"{f.name} must be >= 0, not {value}")
+        if self.dt <= 0:
+            raise ValueError("dt must be > 0")
+        if not 0 < self.r_min <= self.r_max:
+            raise ValueError(f"need 0 < r_min <= r_max, not {self.r_min}, {self.r_max}")
+        if not self.clamp_gap < self.blend_gap:
+            raise ValueError("clamp_gap must be below blend_gap")
+        if self.skin <= 0:
+            raise ValueError("skin must be > 0")
+        if self.half_width <= self.r_max:
+            raise ValueError("half_width must exceed r_max")
+
+    @property
+    def list_radius(self) -> float:
+        """Centre distance within which pairs are listed as neighbours (m)."""
+        return 2 * self.r_max + self.magnet_cutoff + self.skin
+
+    @property
+    def static_force(self) -> float:
+        """Largest force (N, per unit mass) a particle at rest resists."""
+        return self.static_factor * self.mu * self.gravity

@@ -1,0 +1,1 @@
+"""Tests of the run driver: run folders, the published CSV, snapshots and resume, pictures."""

@@ -1,0 +1,1 @@
+"""Tests of scenarios: placements, scenario files (ours and the published ones), worlds."""

@@ -17,6 +17,7 @@ BENCHMARKS: list[tuple[str, list[str]]] = [
     ("Host receive path and virtual swarm", [sys.executable, "tools/bench_host.py"]),
     ("Vectorised firmware controller", [sys.executable, "tools/bench_firmware_controller.py"]),
     ("STOP right after a base-station restart", [sys.executable, "tools/bench_stop_restart.py"]),
+    ("Swarm placement (SI Algorithm 5)", [sys.executable, "tools/bench_placement.py"]),
     ("Firmware in the loop (simavr)", [sys.executable, "tools/bench_sim.py"]),
     ("Video tracker on synthetic runs", [sys.executable, "tools/bench_tracker.py"]),
 ]

@@ -32,6 +32,7 @@ COMMANDS: dict[str, str] = {
     "radio": "configure XBee radios for the fleet",
     "fleet": "create or list the fleet file",
     # simulation
+    "simulate": "a swarm in the simulated world: scenario file or flags, run folder",
     "study": "run one of the paper's simulation studies on Dask",
     # analysis
     "track": "track the swarm on video: centroid per frame as TRACK.csv, contact sheet",

@@ -21,8 +21,13 @@ class ProgressBar:
         self._last_draw = 0.0
         self._last_tenth = -1
         self._done = 0
+        self._note = ""
 
     def _line(self, done: int) -> str:
+        line = self._bar(done)
+        return f"{line}, {self._note}" if self._note else line
+
+    def _bar(self, done: int) -> str:
         elapsed = time.monotonic() - self._started
         if self.total <= 0:
             return f"{self.label}: {done} {self.unit}, {elapsed:.0f} s"
@@ -34,8 +39,10 @@ class ProgressBar:
             f"{done}/{self.total} {self.unit}, {left:.0f} s left"
         )
 
-    def update(self, done: int) -> None:
+    def update(self, done: int, note: str = "") -> None:
+        """Shows `done` of the total, and a note after it (e.g. a speed)."""
         self._done = done
+        self._note = note
         now = time.monotonic()
         if self._live:
             if now - self._last_draw >= 0.2:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
 
 # Angular margin (rad) added to every blocked arc of Algorithm 5's sweep, so that a particle swept
 # to the end of an arc clears the blocking one by ~0.15 nm instead of touching it to the last bit.
@@ -213,6 +214,68 @@ def hexagonal(count: int, spacing: float, at: tuple[float, float] = (0.0, 0.0)) 
         ring += 1
     xy = np.concatenate(points)[:count] + np.asarray(at, dtype=np.float64)
     return Placement(xy)
+
+
+def scatter(
+    count: int,
+    radius: float,
+    region: tuple[float, float, float, float],
+    rng: np.random.Generator,
+    avoid_xy: FloatArray,
+    avoid_r: FloatArray,
+    blocked: Callable[[FloatArray, FloatArray], BoolArray] | None = None,
+) -> Placement:
+    """`count` discs dropped at uniformly random spots of the rectangle (x_min, x_max, y_min,
+    y_max), wholly inside it, each kept only where it overlaps no disc kept before, none of
+    the discs to avoid (centres avoid_xy, radii avoid_r) and nothing `blocked` (centres, radii)
+    reports: random sequential addition, the loose particles of Fig. S21."""
+    _check_count(count)
+    _check_positive("radius", radius)
+    x_min, x_max, y_min, y_max = region
+    if x_max - x_min < 2 * radius or y_max - y_min < 2 * radius:
+        raise PlacementError(f"a region of {x_max - x_min:g} x {y_max - y_min:g} m holds no disc")
+    tree = cKDTree(avoid_xy) if len(avoid_xy) else None
+    reach = 2.0 * max(float(np.max(avoid_r, initial=radius)), radius)
+    cell = 2.0 * radius
+    kept: list[tuple[float, float]] = []
+    grid: dict[tuple[int, int], list[int]] = {}
+    tries = 0
+    while len(kept) < count:
+        if tries > 200 * count + 1000:
+            raise PlacementError(
+                f"only {len(kept)} of {count} loose particles fit in the region "
+                f"x {x_min:g}..{x_max:g}, y {y_min:g}..{y_max:g}"
+            )
+        batch = 256
+        tries += batch
+        xy = np.column_stack(
+            (
+                rng.uniform(x_min + radius, x_max - radius, batch),
+                rng.uniform(y_min + radius, y_max - radius, batch),
+            )
+        )
+        free = np.ones(batch, dtype=np.bool_)
+        if tree is not None:
+            for i, near in enumerate(tree.query_ball_point(xy, reach)):
+                if near:
+                    gaps = np.hypot(*(avoid_xy[near] - xy[i]).T) - avoid_r[near] - radius
+                    free[i] = bool((gaps >= 0).all())
+        if blocked is not None:
+            free &= ~blocked(xy, np.full(batch, radius))
+        for x, y in xy[free]:
+            ix, iy = math.floor(x / cell), math.floor(y / cell)
+            clear = all(
+                math.hypot(x - kept[j][0], y - kept[j][1]) >= 2 * radius
+                for dx in (-1, 0, 1)
+                for dy in (-1, 0, 1)
+                for j in grid.get((ix + dx, iy + dy), ())
+            )
+            if clear:
+                grid.setdefault((ix, iy), []).append(len(kept))
+                kept.append((float(x), float(y)))
+                if len(kept) == count:
+                    break
+    return Placement(np.array(kept, dtype=np.float64).reshape(count, 2))
 
 
 # ---- positions from a file ------------------------------------------------------------------

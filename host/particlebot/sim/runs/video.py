@@ -1,0 +1,67 @@
+"""A run's video: top-view frames drawn while it runs (kept as PNGs in the run folder, so a
+stopped run resumes its film too), encoded as MP4 or GIF by the ffmpeg of the imageio-ffmpeg
+wheel when the run ends."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+from particlebot.sim.runs.pictures import Frame, View, draw_swarm, picture_size
+
+FPS = 10
+FRAME_WIDTH_IN = 9.6
+"""960 pixels wide at 100 dpi, as high as the run's view needs."""
+
+
+class VideoError(RuntimeError):
+    """ffmpeg could not encode the frames."""
+
+
+def frame_every(total_steps: int, frames: int) -> int:
+    """Steps between frames for about `frames` frames over the run."""
+    return max(1, total_steps // frames)
+
+
+def frame_path(folder: Path, index: int) -> Path:
+    return folder / f"{index:06d}.png"
+
+
+def write_frame(folder: Path, index: int, frame: Frame, view: View) -> None:
+    folder.mkdir(exist_ok=True)
+    width, height = picture_size(view, FRAME_WIDTH_IN)
+    # Whole pixels, an even number each way (H.264's colour subsampling wants that).
+    figure = draw_swarm(frame, view, (width, round(height * 50) / 50))
+    temporary = folder / f"{index:06d}.part.png"
+    figure.savefig(temporary)
+    temporary.replace(frame_path(folder, index))
+
+
+def encode(folder: Path, output: Path, fps: int = FPS) -> Path:
+    """The PNG frames of `folder`, in order, as output (.mp4: H.264; .gif)."""
+    import imageio_ffmpeg
+
+    frames = sorted(p for p in folder.glob("[0-9]*.png") if not p.name.endswith(".part.png"))
+    if not frames:
+        raise VideoError(f"no frames in {folder}")
+    # Frames are numbered from 0 without gaps (one every so many steps, resumed runs included).
+    command = [
+        imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-framerate", str(fps),
+        "-start_number", "0", "-i", str(folder / "%06d.png"),
+    ]  # fmt: skip
+    if output.suffix.lower() == ".gif":
+        command += ["-vf", "scale=640:-1:flags=lanczos"]
+    else:
+        command += ["-vf", "format=yuv420p", "-c:v", "libx264", "-crf", "23"]
+    temporary = output.with_name(output.stem + ".part" + output.suffix)
+    result = subprocess.run([*command, str(temporary)], capture_output=True, text=True, check=False)
+    if result.returncode != 0:
+        temporary.unlink(missing_ok=True)
+        raise VideoError(f"ffmpeg could not write {output.name}: {result.stderr.strip()[-300:]}")
+    temporary.replace(output)
+    return output
+
+
+def discard(folder: Path) -> None:
+    shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,215 @@
+"""The Scenario: everything one run needs, as frozen data, whichever file it came from."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from enum import StrEnum
+from pathlib import Path
+from typing import Literal
+
+from particlebot.sim.particles.model.firmware import FirmwareSettings
+from particlebot.sim.particles.model.published import PublishedSettings
+from particlebot.sim.world.arena import Circle, Rect
+from particlebot.sim.world.light import ShadowMode
+from particlebot.sim.world.params import PhysicsParams
+
+Precision = Literal["float64", "float32"]
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot run, said in one line: file, line, key, what is wrong."""
+
+
+class PlacementKind(StrEnum):
+    """How the swarm's particles are put down before the run."""
+
+    ALGORITHM5 = "algorithm5"
+    """SI Algorithm 5: a random blob grown by tangent placements (the published default)."""
+    HEX = "hex"
+    """A hexagonal blob, ring by ring around the first particle."""
+    LINE = "line"
+    """A straight line from the first particle."""
+    FILE = "file"
+    """Centres (and radii) listed in a CSV or TOML file."""
+
+
+class ControllerKind(StrEnum):
+    PUBLISHED = "published"
+    """The published simulator's light wave."""
+    FIRMWARE = "firmware"
+    """What our firmware does (eq. 4, S_n by method A-D)."""
+
+
+@dataclass(frozen=True)
+class SwarmSpec:
+    """The robot's particles and where they start."""
+
+    particles: int = 10
+    placement: PlacementKind = PlacementKind.ALGORITHM5
+    at: tuple[float, float] = (0.0, 0.0)
+    """The first particle's centre (m); the published simulator starts its swarm at (5, 0)."""
+    spacing: float | None = None
+    """Centre spacing of a line or hex blob (m); None: touching contracted particles."""
+    direction_deg: float = 0.0
+    """A line's direction, counterclockwise from +x."""
+    file: Path | None = None
+    """Positions for placement `file` (CSV x, y[, r] or TOML particles = [[x, y], ...])."""
+
+
+@dataclass(frozen=True)
+class LampSpec:
+    """The point lamp (m); height None: the world's default (the SI's calibration height)."""
+
+    x: float = 0.0
+    y: float = 0.0
+    height: float | None = None
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """A passive disc the swarm may push. Position None: in front of the swarm, on the line from
+    its centroid toward the lamp, one contracted radius clear of the nearest particle (as the
+    published simulator puts its object in front of the swarm on the lamp's side)."""
+
+    x: float | None = None
+    y: float | None = None
+    radius: float | None = None
+    """Radius (m); None: radius_factor x the contracted particle radius."""
+    radius_factor: float = 2.0
+    mass_factor: float = 1.0
+    friction_factor: float = 1.0
+    attraction_factor: float = 0.0
+
+
+@dataclass(frozen=True)
+class DeadSpec:
+    """Particles that stop actuating at `at_s` (chosen at random from the run's seed)."""
+
+    count: int = 0
+    fraction: float | None = None
+    """Of the robot's particles, rounded; overrides count when given."""
+    at_s: float = 0.0
+    detach: bool = False
+    """Dead particles let go of the robot (magnets off), as in Fig. S21."""
+
+    def resolve(self, robot: int) -> int:
+        return round(self.fraction * robot) if self.fraction is not None else self.count
+
+
+@dataclass(frozen=True)
+class FreeSpec:
+    """Loose particles scattered at random in a rectangle, annexed when the robot touches them."""
+
+    count: int = 0
+    region: Rect | None = None
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    kind: ControllerKind = ControllerKind.PUBLISHED
+    published: PublishedSettings = field(default_factory=PublishedSettings)
+    firmware: FirmwareSettings = field(default_factory=FirmwareSettings)
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """What a run writes into its folder."""
+
+    dump_interval_s: float = 60.0
+    """A CSV row every so many simulated seconds (the published 60 s)."""
+    per_particle: bool = False
+    """Every particle's x, y, vx, vy, r in each row (the published `testing 1`)."""
+    csv_name: str = "run.csv"
+    snapshot_interval_s: float = 600.0
+    """A snapshot to resume from every so many simulated seconds (and at the end or a stop)."""
+    video_name: str = "run.mp4"
+    """Name of the video `--video` writes."""
+    video_frames: int = 200
+    """About this many frames, evenly spread over the run (10 per second of video)."""
+
+
+@dataclass(frozen=True)
+class SourceMap:
+    """Where a scenario came from: its file, the line of each key, and what the file calls a
+    key where its name differs from the scenario's (the published format's nCells for
+    swarm.particles), so that every error points at the file's own words."""
+
+    path: Path | None = None
+    lines: tuple[tuple[str, int], ...] = ()
+    names: tuple[tuple[str, str], ...] = ()
+
+    def where(self, key: str) -> str:
+        """'file:line: key' as far as known, for the start of an error message."""
+        found = dict(self.lines)
+        shown = dict(self.names)
+        # A key the file did not write out: point at its table.
+        probe = key
+        while probe not in found and "." in probe:
+            probe = probe.rsplit(".", 1)[0]
+        line = found.get(probe)
+        name = shown.get(key)
+        if name is None:
+            name = shown.get(probe, key)
+        place = "" if self.path is None else str(self.path)
+        if line is not None:
+            place += f":{line}"
+        return f"{place}: {name}" if place else name
+
+    def error(self, key: str, message: str) -> ScenarioError:
+        return ScenarioError(f"{self.where(key)}: {message}")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything a run needs. Build a world from it with scenarios.build.build_world()."""
+
+    name: str = "run"
+    swarm: SwarmSpec = field(default_factory=SwarmSpec)
+    lamp: LampSpec = field(default_factory=LampSpec)
+    rects: tuple[Rect, ...] = ()
+    circles: tuple[Circle, ...] = ()
+    objects: tuple[ObjectSpec, ...] = ()
+    dead: DeadSpec = field(default_factory=DeadSpec)
+    free: FreeSpec = field(default_factory=FreeSpec)
+    controller: ControllerSpec = field(default_factory=ControllerSpec)
+    physics: PhysicsParams = field(default_factory=PhysicsParams)
+    shadow: ShadowMode = ShadowMode.IGNORE
+    duration_s: float = 600.0
+    seed: int = 0
+    precision: Precision = "float64"
+    output: OutputSpec = field(default_factory=OutputSpec)
+    source: SourceMap = field(default_factory=SourceMap, compare=False)
+
+    def error(self, key: str, message: str) -> ScenarioError:
+        """A one-line error about `key`, naming the file and line it came from."""
+        return self.source.error(key, message)
+
+    @property
+    def steps(self) -> int:
+        """Steps of the whole run."""
+        return round(self.duration_s / self.physics.dt)
+
+    @property
+    def dump_every(self) -> int:
+        """Steps between CSV rows."""
+        return max(1, round(self.output.dump_interval_s / self.physics.dt))
+
+    @property
+    def snapshot_every(self) -> int:
+        """Steps between periodic snapshots."""
+        return max(1, round(self.output.snapshot_interval_s / self.physics.dt))
+
+
+def physics_overrides(params: PhysicsParams) -> dict[str, float | bool]:
+    """The fields of params that differ from the published defaults."""
+    default = PhysicsParams()
+    return {
+        f.name: getattr(params, f.name)
+        for f in fields(params)
+        if getattr(params, f.name) != getattr(default, f.name)
+    }
+
+
+def finite(value: float) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)

@@ -1,0 +1,380 @@
+"""Our scenario file: TOML (see scenarios/README in the repository's README, "Simulating a
+swarm"), read into a Scenario with every mistake reported as file:line: key: what."""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from particlebot.sim.particles.model.firmware import FirmwareSettings
+from particlebot.sim.particles.model.published import PublishedSettings
+from particlebot.sim.scenarios.fields import Fields
+from particlebot.sim.scenarios.scenario import (
+    ControllerKind,
+    ControllerSpec,
+    DeadSpec,
+    FreeSpec,
+    LampSpec,
+    ObjectSpec,
+    OutputSpec,
+    PlacementKind,
+    Scenario,
+    ScenarioError,
+    SourceMap,
+    SwarmSpec,
+)
+from particlebot.sim.world.arena import Circle, Rect
+from particlebot.sim.world.light import ShadowMode
+from particlebot.sim.world.params import PhysicsParams
+
+TOP_KEYS = (
+    "name",
+    "seed",
+    "duration_s",
+    "shadow",
+    "precision",
+    "swarm",
+    "lamp",
+    "rectangle",
+    "circle",
+    "object",
+    "dead",
+    "free",
+    "controller",
+    "physics",
+    "output",
+)
+SHADOW_NAMES = {"ignore": ShadowMode.IGNORE, "last": ShadowMode.LAST, "still": ShadowMode.STILL}
+
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_KEY = re.compile(
+    r"""^\s*((?:[A-Za-z0-9_\-]+|"[^"]*"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|"[^"]*"|'[^']*'))*)\s*="""
+)
+_STRING = re.compile(r""""(?:[^"\\]|\\.)*"|'[^']*'""")
+
+
+def key_lines(text: str) -> dict[str, int]:
+    """The line (1-based) of every table header and key of a TOML text, by dotted path; the
+    n-th [[name]] table is `name[n]` (counted from 1). Keys inside inline tables share the line
+    of their parent key. tomllib gives line numbers for syntax errors only: this is for the
+    others (a misspelt key, a value out of range)."""
+    lines: dict[str, int] = {}
+    current = ""
+    arrays: dict[str, int] = {}
+    depth = 0  # brackets still open from a multi-line array
+    in_string = False  # inside a multi-line basic or literal string
+    for number, line in enumerate(text.splitlines(), start=1):
+        if in_string:
+            if line.count('"""') % 2 or line.count("'''") % 2:
+                in_string = False
+            continue
+        if depth > 0:
+            depth += _bracket_balance(line)
+            continue
+        header = _HEADER.match(line)
+        if header and not _KEY.match(line):
+            name = _dotted(header.group(2))
+            if header.group(1) == "[[":
+                arrays[name] = arrays.get(name, 0) + 1
+                name = f"{name}[{arrays[name]}]"
+            else:
+                name = _resolve_arrays(name, arrays)
+            current = name
+            lines.setdefault(current, number)
+            continue
+        key = _KEY.match(line)
+        if key:
+            path = _dotted(key.group(1))
+            lines.setdefault(f"{current}.{path}" if current else path, number)
+            rest = line[key.end() :]
+            if rest.count('"""') % 2 or rest.count("'''") % 2:
+                in_string = True
+            else:
+                depth = max(0, _bracket_balance(rest))
+    return lines
+
+
+def _dotted(text: str) -> str:
+    """a . "b" . c -> a.b.c (quoted keys with dots inside are beyond this locator)."""
+    return ".".join(part.strip().strip("\"'") for part in text.split("."))
+
+
+def _resolve_arrays(name: str, arrays: dict[str, int]) -> str:
+    """[object.extra] after [[object]] belongs to the latest object: `object[n].extra`."""
+    parts = name.split(".")
+    for cut in range(len(parts), 0, -1):
+        head = ".".join(parts[:cut])
+        if head in arrays:
+            return ".".join([f"{head}[{arrays[head]}]", *parts[cut:]])
+    return name
+
+
+def _bracket_balance(text: str) -> int:
+    code = _STRING.sub("", text).split("#", 1)[0]
+    return code.count("[") + code.count("{") - code.count("]") - code.count("}")
+
+
+def read_scenario(path: Path) -> Scenario:
+    """Reads our TOML scenario file; ScenarioError (one line) on any mistake."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read {path}: {exc}") from None
+    return parse_scenario(text, path)
+
+
+def parse_scenario(text: str, path: Path | None = None) -> Scenario:
+    """A scenario from TOML text; relative file names in it are relative to path's folder."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        message = str(exc)
+        found = re.search(r"\(at line (\d+), column \d+\)", message)
+        where = f"{path}:{found.group(1)}" if path and found else str(path or "scenario")
+        raise ScenarioError(f"{where}: not valid TOML: {message}") from None
+    source = SourceMap(path, tuple(sorted(key_lines(text).items())))
+    return _Reader(source, path.parent if path else Path(".")).scenario(data)
+
+
+class _Reader:
+    def __init__(self, source: SourceMap, folder: Path) -> None:
+        self.source = source
+        self.f = Fields(source)
+        self.folder = folder
+
+    def scenario(self, data: dict[str, Any]) -> Scenario:
+        f = self.f
+        f.only(data, "", TOP_KEYS)
+        physics = self.physics(f.table(data, "physics"))
+        shadow = self.shadow(data)
+        precision = f.string(data, "precision", "", "float64")
+        if precision not in ("float64", "float32"):
+            raise f.fail("precision", f"must be 'float64' or 'float32', not {precision!r}")
+        scenario = Scenario(
+            name=self.name(data),
+            swarm=self.swarm(f.table(data, "swarm")),
+            lamp=self.lamp(f.table(data, "lamp")),
+            rects=tuple(self.rectangles(data)),
+            circles=tuple(self.circles(data)),
+            objects=tuple(self.objects(data)),
+            dead=self.dead(f.table(data, "dead")),
+            free=self.free(f.table(data, "free")),
+            controller=self.controller(f.table(data, "controller")),
+            physics=physics,
+            shadow=shadow,
+            duration_s=f.number(data, "duration_s", "", 600.0, above=0),
+            seed=f.integer(data, "seed", "", 0),
+            precision="float32" if precision == "float32" else "float64",
+            output=self.output(f.table(data, "output")),
+            source=self.source,
+        )
+        if scenario.dead.resolve(scenario.swarm.particles) > scenario.swarm.particles:
+            key = "dead.fraction" if scenario.dead.fraction is not None else "dead.count"
+            raise f.fail(key, f"more dead particles than the swarm's {scenario.swarm.particles}")
+        return scenario
+
+    def name(self, data: dict[str, Any]) -> str:
+        name = self.f.string(data, "name", "", "run")
+        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.\-]*", name):
+            raise self.f.fail("name", f"must be letters, digits, '.', '_' or '-', not {name!r}")
+        return name
+
+    def shadow(self, data: dict[str, Any]) -> ShadowMode:
+        if "shadow" not in data:
+            return ShadowMode.IGNORE
+        value = data["shadow"]
+        if isinstance(value, str) and value in SHADOW_NAMES:
+            return SHADOW_NAMES[value]
+        if isinstance(value, int) and not isinstance(value, bool) and value in (0, 1, 2):
+            return ShadowMode(value)
+        raise self.f.fail(
+            "shadow", f"must be 'ignore', 'last', 'still' (or 0, 1, 2), not {value!r}"
+        )
+
+    def swarm(self, table: dict[str, Any]) -> SwarmSpec:
+        f, p = self.f, "swarm"
+        f.only(table, p, ("particles", "placement", "at", "spacing", "direction_deg", "file"))
+        placement = f.choice(table, "placement", p, PlacementKind, PlacementKind.ALGORITHM5)
+        at = f.numbers(table, "at", p, 2)
+        spacing = f.number(table, "spacing", p, 0.0, above=0) if "spacing" in table else None
+        file = None
+        if placement is PlacementKind.FILE:
+            if "file" not in table:
+                raise f.fail("swarm.placement", "placement 'file' needs `file = \"...\"`")
+            file = self.folder / f.string(table, "file", p, "")
+            if not file.is_file():
+                raise f.fail("swarm.file", f"no such file: {file}")
+        elif "file" in table:
+            raise f.fail("swarm.file", "is only for placement = 'file'")
+        particles = f.integer(table, "particles", p, 10, minimum=1)
+        if placement is PlacementKind.FILE and "particles" in table:
+            raise f.fail("swarm.particles", "comes from the file with placement = 'file'")
+        return SwarmSpec(
+            particles=particles,
+            placement=placement,
+            at=(at[0], at[1]) if at else (0.0, 0.0),
+            spacing=spacing,
+            direction_deg=f.number(table, "direction_deg", p, 0.0),
+            file=file,
+        )
+
+    def lamp(self, table: dict[str, Any]) -> LampSpec:
+        f, p = self.f, "lamp"
+        f.only(table, p, ("x", "y", "height"))
+        height = f.number(table, "height", p, 0.0, above=0) if "height" in table else None
+        return LampSpec(f.number(table, "x", p, 0.0), f.number(table, "y", p, 0.0), height)
+
+    def _array(self, data: dict[str, Any], key: str) -> list[tuple[str, dict[str, Any]]]:
+        """The [[key]] tables with their paths (key[1], key[2], ...)."""
+        value = data.get(key, [])
+        if isinstance(value, dict):
+            value = [value]
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.f.fail(key, f"must be [[{key}]] tables")
+        return [(f"{key}[{i}]", table) for i, table in enumerate(value, start=1)]
+
+    def rectangles(self, data: dict[str, Any]) -> list[Rect]:
+        rects = []
+        for p, table in self._array(data, "rectangle"):
+            self.f.only(table, p, ("x", "y"))
+            x, y = self._span(table, "x", p), self._span(table, "y", p)
+            rects.append(Rect(x[0], x[1], y[0], y[1]))
+        return rects
+
+    def _span(self, table: dict[str, Any], key: str, prefix: str) -> tuple[float, float]:
+        span = self.f.numbers(table, key, prefix, 2)
+        if span is None:
+            raise self.f.fail(prefix, f"needs {key} = [min, max]")
+        if not span[0] < span[1]:
+            raise self.f.fail(f"{prefix}.{key}", f"needs min < max, not {list(span)}")
+        return span[0], span[1]
+
+    def circles(self, data: dict[str, Any]) -> list[Circle]:
+        circles = []
+        for p, table in self._array(data, "circle"):
+            f = self.f
+            f.only(table, p, ("x", "y", "radius"))
+            if "radius" not in table:
+                raise f.fail(p, "needs radius = ...")
+            circles.append(
+                Circle(
+                    f.number(table, "x", p, 0.0),
+                    f.number(table, "y", p, 0.0),
+                    f.number(table, "radius", p, 1.0, above=0),
+                )
+            )
+        return circles
+
+    def objects(self, data: dict[str, Any]) -> list[ObjectSpec]:
+        objects = []
+        for p, table in self._array(data, "object"):
+            f = self.f
+            f.only(
+                table,
+                p,
+                (
+                    "x",
+                    "y",
+                    "radius",
+                    "radius_factor",
+                    "mass_factor",
+                    "friction_factor",
+                    "attraction_factor",
+                ),
+            )
+            if ("x" in table) != ("y" in table):
+                raise f.fail(p, "give both x and y, or neither (in front of the swarm)")
+            if "radius" in table and "radius_factor" in table:
+                raise f.fail(f"{p}.radius", "give radius or radius_factor, not both")
+            objects.append(
+                ObjectSpec(
+                    x=f.number(table, "x", p, 0.0) if "x" in table else None,
+                    y=f.number(table, "y", p, 0.0) if "y" in table else None,
+                    radius=f.number(table, "radius", p, 0.0, above=0)
+                    if "radius" in table
+                    else None,
+                    radius_factor=f.number(table, "radius_factor", p, 2.0, above=0),
+                    mass_factor=f.number(table, "mass_factor", p, 1.0, above=0),
+                    friction_factor=f.number(table, "friction_factor", p, 1.0, minimum=0),
+                    attraction_factor=f.number(table, "attraction_factor", p, 0.0, minimum=0),
+                )
+            )
+        return objects
+
+    def dead(self, table: dict[str, Any]) -> DeadSpec:
+        f, p = self.f, "dead"
+        f.only(table, p, ("count", "fraction", "at_s", "detach"))
+        if "count" in table and "fraction" in table:
+            raise f.fail("dead.fraction", "give count or fraction, not both")
+        fraction = None
+        if "fraction" in table:
+            fraction = f.number(table, "fraction", p, 0.0, minimum=0)
+            if fraction > 1:
+                raise f.fail("dead.fraction", f"must be 0..1, not {fraction:g}")
+        return DeadSpec(
+            count=f.integer(table, "count", p, 0),
+            fraction=fraction,
+            at_s=f.number(table, "at_s", p, 0.0, minimum=0),
+            detach=f.boolean(table, "detach", p, False),
+        )
+
+    def free(self, table: dict[str, Any]) -> FreeSpec:
+        f, p = self.f, "free"
+        f.only(table, p, ("count", "x", "y"))
+        count = f.integer(table, "count", p, 0)
+        if count == 0:
+            return FreeSpec()
+        x, y = self._span(table, "x", p), self._span(table, "y", p)
+        return FreeSpec(count, Rect(x[0], x[1], y[0], y[1]))
+
+    def controller(self, table: dict[str, Any]) -> ControllerSpec:
+        f, p = self.f, "controller"
+        f.only(table, p, ("kind", "published", "firmware"))
+        published = f.settings(
+            PublishedSettings, f.table(table, "published", p), "controller.published",
+            PublishedSettings(),
+        )  # fmt: skip
+        firmware = f.settings(
+            FirmwareSettings, f.table(table, "firmware", p), "controller.firmware",
+            FirmwareSettings(),
+        )  # fmt: skip
+        kind = f.choice(table, "kind", p, ControllerKind, ControllerKind.PUBLISHED)
+        return ControllerSpec(kind, published, firmware)
+
+    def physics(self, table: dict[str, Any]) -> PhysicsParams:
+        return self.f.settings(PhysicsParams, table, "physics", PhysicsParams())
+
+    def output(self, table: dict[str, Any]) -> OutputSpec:
+        f, p = self.f, "output"
+        f.only(
+            table,
+            p,
+            (
+                "dump_interval_s",
+                "per_particle",
+                "csv",
+                "snapshot_interval_s",
+                "video",
+                "video_frames",
+            ),
+        )
+        names = {}
+        for key, default in (("csv", "run.csv"), ("video", "run.mp4")):
+            name = f.string(table, key, p, default)
+            if Path(name).name != name or name.startswith("."):
+                raise f.fail(f"output.{key}", f"must be a file name without a folder: {name!r}")
+            names[key] = name
+        if not names["csv"].lower().endswith(".csv"):
+            raise f.fail("output.csv", f"must end in .csv: {names['csv']!r}")
+        if not names["video"].lower().endswith((".mp4", ".gif")):
+            raise f.fail("output.video", f"must end in .mp4 or .gif: {names['video']!r}")
+        return OutputSpec(
+            dump_interval_s=f.number(table, "dump_interval_s", p, 60.0, above=0),
+            per_particle=f.boolean(table, "per_particle", p, False),
+            csv_name=names["csv"],
+            snapshot_interval_s=f.number(table, "snapshot_interval_s", p, 600.0, above=0),
+            video_name=names["video"],
+            video_frames=f.integer(table, "video_frames", p, 200, minimum=1),
+        )

@@ -225,4 +225,50 @@ void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint
   out[2] = plan.epoch_ms;
 }
 
+size_t pb_settings_image(uint8_t id, const uint8_t *params, const int32_t *values, size_t count,
+                         uint8_t *out, size_t capacity, size_t *refused, uint8_t *result) {
+  if (capacity < PB_EEPROM_SIZE) return 0;
+  RamStorage storage;
+  pb::Settings settings(storage);
+  (void)settings.load();  // a blank chip: the defaults and the unassigned id
+  if (!settings.set_id(id)) {
+    if (refused != NULL) *refused = count;
+    return 0;
+  }
+  for (size_t i = 0; i < count; ++i) {
+    const pb::ParamResult r = settings.set(params[i], values[i]);
+    if (r != pb::ParamResult::OK) {
+      if (refused != NULL) *refused = i;
+      if (result != NULL) *result = static_cast<uint8_t>(r);
+      return 0;
+    }
+  }
+  memcpy(out, storage.bytes(), PB_EEPROM_SIZE);
+  return PB_EEPROM_SIZE;
+}
+
+uint16_t pb_frame_timeout_ms(void) {
+  return pb::kFrameTimeoutMs;
+}
+
+uint16_t pb_ping_slot_ms(void) {
+  return pb::Particle::kPingSlotMs;
+}
+
+uint8_t pb_ping_slots_unknown(void) {
+  return pb::Particle::kPingSlotsUnknown;
+}
+
+uint8_t pb_servo_cal_points(void) {
+  return pb::kServoCalPoints;
+}
+
+uint16_t pb_servo_pulse_min_us(void) {
+  return pb::kServoPulseMinUs;
+}
+
+uint16_t pb_servo_pulse_max_us(void) {
+  return pb::kServoPulseMaxUs;
+}
+
 }  // extern "C"

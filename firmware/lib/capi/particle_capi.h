@@ -107,6 +107,28 @@ void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint
                    uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
                    uint32_t out[3]);
 
+// ---- what a simulation of the firmware needs to know of it -----------------------------------
+
+// The settings block a particle with this id keeps in EEPROM, written by the firmware's own
+// Settings code (layout, defaults, CRC), with params[i] set to values[i] in order, each checked
+// as SET_PARAM checks it. Fills out (capacity >= PB_EEPROM_SIZE; the bytes after the block read
+// as an erased chip's 0xFF) and returns PB_EEPROM_SIZE. Returns 0 and writes nothing useful when
+// the id is not 1..253 (*refused = count) or a value is refused (*refused = its index, *result
+// = the ParamResult, e.g. OUT_OF_RANGE).
+size_t pb_settings_image(uint8_t id, const uint8_t *params, const int32_t *values, size_t count,
+                         uint8_t *out, size_t capacity, size_t *refused, uint8_t *result);
+
+// A partial frame older than this is dropped by the particle's parser (ms without a byte).
+uint16_t pb_frame_timeout_ms(void);
+// A broadcast request that draws a reply is answered in a random one of pb_ping_slots_unknown()
+// slots of pb_ping_slot_ms() each while the particle knows no group size.
+uint16_t pb_ping_slot_ms(void);
+uint8_t pb_ping_slots_unknown(void);
+// Points of the servo calibration table (SERVO_CAL_0..) and the pulses a servo may be given.
+uint8_t pb_servo_cal_points(void);
+uint16_t pb_servo_pulse_min_us(void);
+uint16_t pb_servo_pulse_max_us(void);
+
 #ifdef __cplusplus
 }
 #endif

@@ -13,13 +13,20 @@ import logging
 import os
 import subprocess
 import threading
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Self
 
-from particlebot.protocol.generated import FRAME_OVERHEAD, MAX_PAYLOAD, Method, Status
+from particlebot.protocol.generated import (
+    FRAME_OVERHEAD,
+    MAX_PAYLOAD,
+    Method,
+    Param,
+    ParamResult,
+    Status,
+)
 
 SENSOR_COUNT = 6
 EEPROM_SIZE = 1024
@@ -380,6 +387,25 @@ def parse_stream(data: bytes | bytearray) -> tuple[list[ParsedFrame], ParseCount
 # ---- firmware constants and the epoch plan, for the vectorised model of the firmware ------------
 
 _MODEL_SIGNATURES: dict[str, tuple[object, list[object]]] = {
+    "pb_settings_image": (
+        ctypes.c_size_t,
+        [
+            ctypes.c_uint8,
+            _U8P,
+            ctypes.POINTER(ctypes.c_int32),
+            ctypes.c_size_t,
+            _U8P,
+            ctypes.c_size_t,
+            ctypes.POINTER(ctypes.c_size_t),
+            _U8P,
+        ],
+    ),
+    "pb_frame_timeout_ms": (ctypes.c_uint16, []),
+    "pb_ping_slot_ms": (ctypes.c_uint16, []),
+    "pb_ping_slots_unknown": (ctypes.c_uint8, []),
+    "pb_servo_cal_points": (ctypes.c_uint8, []),
+    "pb_servo_pulse_min_us": (ctypes.c_uint16, []),
+    "pb_servo_pulse_max_us": (ctypes.c_uint16, []),
     "pb_servo_step_ms": (ctypes.c_uint16, []),
     "pb_adc_full_scale": (ctypes.c_uint16, []),
     "pb_s_n_max": (ctypes.c_uint8, []),
@@ -413,23 +439,68 @@ def _model_library() -> ctypes.CDLL:
 
 @dataclass(frozen=True)
 class FirmwareConstants:
-    """Values the firmware defines outside the protocol that a model of it needs."""
+    """Values the firmware defines outside the protocol that a model or a simulation of it
+    needs."""
 
     servo_step_ms: int  # one servo step; a cycle of cycle_steps steps lasts T
     adc_full_scale: int  # highest reading; a sensor reading it or 0 is left out as faulty
     s_n_max: int  # every estimator saturates S_n here
     group_count_max: int  # cap on N_w of methods B and C with GROUPS = 0
+    frame_timeout_ms: int  # a partial frame this old is dropped by the particle's parser
+    ping_slot_ms: int  # a broadcast request is answered in a random slot of this length...
+    ping_slots_unknown: int  # ...one of this many while the particle knows no group size
+    inter_frame_gap_ms: int  # silence on Serial1 after each frame (one RF packet per frame)
+    servo_cal_points: int  # points of the servo table SERVO_CAL_0..
+    servo_pulse_min_us: int  # the pulses a servo may be given
+    servo_pulse_max_us: int
+
+
+_constants: FirmwareConstants | None = None
 
 
 def firmware_constants() -> FirmwareConstants:
-    """The constants the library was built with."""
+    """The constants the library was built with (read once)."""
+    global _constants
+    if _constants is None:
+        lib = _model_library()
+        _constants = FirmwareConstants(
+            servo_step_ms=int(lib.pb_servo_step_ms()),
+            adc_full_scale=int(lib.pb_adc_full_scale()),
+            s_n_max=int(lib.pb_s_n_max()),
+            group_count_max=int(lib.pb_group_count_max()),
+            frame_timeout_ms=int(lib.pb_frame_timeout_ms()),
+            ping_slot_ms=int(lib.pb_ping_slot_ms()),
+            ping_slots_unknown=int(lib.pb_ping_slots_unknown()),
+            inter_frame_gap_ms=int(lib.pb_inter_frame_gap_ms()),
+            servo_cal_points=int(lib.pb_servo_cal_points()),
+            servo_pulse_min_us=int(lib.pb_servo_pulse_min_us()),
+            servo_pulse_max_us=int(lib.pb_servo_pulse_max_us()),
+        )
+    return _constants
+
+
+def settings_image(particle_id: int, params: Mapping[Param, int] | None = None) -> bytes:
+    """The EEPROM a particle with this id and these parameter values (the rest their defaults)
+    boots from, written by the firmware's own settings code: EEPROM_SIZE bytes. ValueError names
+    a value the firmware refuses (as SET_PARAM would) or an id outside 1..253."""
     lib = _model_library()
-    return FirmwareConstants(
-        servo_step_ms=int(lib.pb_servo_step_ms()),
-        adc_full_scale=int(lib.pb_adc_full_scale()),
-        s_n_max=int(lib.pb_s_n_max()),
-        group_count_max=int(lib.pb_group_count_max()),
+    items = list((params or {}).items())
+    ids = (ctypes.c_uint8 * max(1, len(items)))(*[int(p) for p, _ in items])
+    values = (ctypes.c_int32 * max(1, len(items)))(*[int(v) for _, v in items])
+    out = (ctypes.c_uint8 * EEPROM_SIZE)()
+    refused = ctypes.c_size_t(0)
+    result = ctypes.c_uint8(0)
+    n = lib.pb_settings_image(
+        particle_id, ids, values, len(items), out, EEPROM_SIZE, refused, result
     )
+    if n == 0:
+        if refused.value >= len(items):
+            raise ValueError(f"particle id {particle_id} is outside 1..253")
+        param, value = items[refused.value]
+        raise ValueError(
+            f"{Param(param).name}={value} refused by the firmware: {ParamResult(result.value).name}"
+        )
+    return bytes(out[:n])
 
 
 @dataclass(frozen=True)

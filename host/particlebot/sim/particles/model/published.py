@@ -131,7 +131,7 @@ class PublishedController(Controller):
     def command_ahead(self, view: WorldView, dt: float, out: FloatArray) -> int:
         first = round(view.t / dt)
         self._update_if_due(view, view.t)
-        times = (first + np.arange(out.shape[0])) * dt
+        times = np.asarray((first + np.arange(out.shape[0])) * dt, dtype=np.float64)
         # Stop before the next update: it needs the world as it will be then.
         due = self._updates * self.settings.update_s - _TIME_TOLERANCE
         rows = max(1, int(np.searchsorted(times, due, side="left")))

@@ -16,8 +16,8 @@ from particlebot.logs.jsonl import JsonlWriter
 from particlebot.protocol import DEFINITION_HASH, Method, Start, Status, encode_frame
 from particlebot.radio import Packet, Radio, RadioUrl
 from particlebot.session import Listener, ReceivedFrame, Session
+from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.tracker import SwarmTracker
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 LINK_BYTES_PER_S = 9600 / 10  # 8N1
 STATUS_FRAME_BYTES = Status.PAYLOAD_SIZE + 8
@@ -90,7 +90,7 @@ def receive_path(count: int, log_dir: Path) -> float:
 
 def swarm_speedup(particles: int, seconds: float, kinematics: bool) -> float:
     """Simulated seconds per wall second for a running swarm (START sent, method D)."""
-    swarm = VirtualSwarm(SwarmConfig(count=particles, kinematics=kinematics))
+    swarm = SimSwarm(SwarmConfig(count=particles, kinematics=kinematics))
     start_message = Start(
         run_id=1, method=int(Method.COUNTING), cycle_steps=150, wave_size=0,
         update_interval_s=0, phototaxis=0,

@@ -14,8 +14,9 @@ from particlebot.commands.demo import DemoResult, DemoScript, unresolved_neighbo
 from particlebot.console.app import ConsoleApp
 from particlebot.protocol import DEFINITION_HASH
 from particlebot.radio.virtual import VirtualRadio
+from particlebot.sim.scenarios import presets
+from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.api import Swarm
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 
 def test_the_demo_without_a_terminal_prints_a_summary_and_succeeds(
@@ -31,7 +32,7 @@ def test_the_demo_without_a_terminal_prints_a_summary_and_succeeds(
 
 
 def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
-    world = VirtualSwarm(SwarmConfig(count=5))
+    world = SimSwarm(SwarmConfig(scenario=presets.line(5)))
     radio = VirtualRadio(world, url="virtual://5", speed=20.0)
     swarm = Swarm(radio, log_dir=None)
     script = DemoScript(swarm, world, cycle_steps=75, locomote_s=2.0)

@@ -14,11 +14,11 @@ from particlebot.logs.jsonl import LogError
 from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
 from particlebot.protocol import PARAM_SPECS, Param, State
 from particlebot.radio import RadioError
-from particlebot.radio.virtual import VirtualRadio
+from particlebot.radio.virtual import MAX_PARTICLES, VirtualRadio
+from particlebot.sim.scenarios import presets
+from particlebot.sim.swarm import ParticleSnapshot, SimSwarm, SwarmConfig
 from particlebot.swarm.api import Swarm
 from particlebot.swarm.results import NotConfirmed, ParticlesMissing, StopReport, SwarmError
-from particlebot.virtual import MAX_PARTICLES
-from particlebot.virtual.swarm import ParticleSnapshot, SwarmConfig, VirtualSwarm
 
 
 @dataclass
@@ -44,7 +44,7 @@ class DemoScript:
     (simulated) clock, so it does the same at any speed."""
 
     swarm: Swarm
-    world: VirtualSwarm
+    world: SimSwarm
     cycle_steps: int = 100
     locomote_s: float = 12.0
     listen_timeout_s: float = 5.0
@@ -56,7 +56,7 @@ class DemoScript:
 
     def __call__(self) -> int:
         swarm = self.swarm
-        expected = len(self.world.members)
+        expected = self.world.count
         try:
             swarm.wait_for(count=expected, timeout=self.listen_timeout_s)
         except ParticlesMissing as exc:
@@ -85,7 +85,7 @@ class DemoScript:
                 and particle.state not in (None, State.IDLE, State.ESTIMATING)
             ):
                 self.s_n[particle.id] = particle.s_n
-        return len(self.s_n) >= len(self.world.members)
+        return len(self.s_n) >= self.world.count
 
     def results(self) -> list[DemoResult]:
         """One line per particle, ranked by distance to the lamp when START went out."""
@@ -188,9 +188,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     ui = not args.no_ui and has_terminal()
     speed = args.speed if args.speed is not None else (2.0 if ui else 20.0)
-    config = SwarmConfig(count=args.particles, seed=args.seed)
+    config = SwarmConfig(scenario=presets.line(args.particles, seed=args.seed), seed=args.seed)
     try:
-        world = VirtualSwarm(config)
+        world = SimSwarm(config)
     except (OSError, ImportError) as exc:
         return fail(
             f"the virtual particles need the native firmware library ({exc}); run: make native"

@@ -1,20 +1,22 @@
-"""The emulated 802.15.4 air: XBee packetising, airtime, loss, delay and serial pacing."""
+"""The one 802.15.4 medium: XBee packetising, airtime, loss, delay and serial pacing."""
 
 from __future__ import annotations
 
 import pytest
 
-from particlebot.sim.medium import (
+from particlebot.sim.air.medium import (
     BASE,
     BAUD,
-    CPU_HZ,
     MAX_RF_PAYLOAD,
     NOISE,
     RO_CHARS,
     Medium,
+    Reception,
+    SerialLine,
     char_cycles,
     rf_cycles,
 )
+from particlebot.sim.clock import CPU_HZ
 
 CHAR = char_cycles()  # 8333.3 cycles: 10 bits at 9600 baud
 
@@ -26,8 +28,9 @@ class Air:
         self.got: list[tuple[int, int, bytes, int]] = []
         self.medium = Medium(particles, self._deliver, **options)  # type: ignore[arg-type]
 
-    def _deliver(self, receiver: int, source: int, data: bytes, cycle: int) -> None:
-        self.got.append((receiver, source, data, cycle))
+    def _deliver(self, copy: Reception) -> None:
+        due = copy.last if copy.receiver == BASE else copy.arrival
+        self.got.append((copy.receiver, copy.source, copy.data, due))
 
     def write(self, node: int, data: bytes, start: int, spacing: float = CHAR) -> int:
         """Node's host writes data back to back from start; returns the last byte's cycle."""
@@ -177,3 +180,15 @@ def test_airtime_is_the_802_15_4_rate_with_framing():
     assert rf_cycles(0) == 20 * 8 * CPU_HZ // 250_000
     assert rf_cycles(100) == 120 * 8 * 32
     assert char_cycles(BAUD) == pytest.approx(8333.33, abs=0.01)
+
+
+def test_a_serial_line_takes_ten_bits_a_byte_and_queues_what_is_written_while_busy():
+    line = SerialLine()
+    first = line.write(b"abc", 1000)
+    # Each byte is in once its stop bit ends, rounded up to a whole cycle as the harness does.
+    assert first == [1000 + -(-(k * 10 * CPU_HZ) // BAUD) for k in (1, 2, 3)]
+    assert line.free_at == first[-1]
+    second = line.write(b"d", 1000)  # written while the line was still busy: after "c"
+    assert second[0] == pytest.approx(first[-1] + CHAR, abs=1)
+    later = line.write(b"e", 10 * CPU_HZ)  # an idle line starts at once
+    assert later == [10 * CPU_HZ + -(-(10 * CPU_HZ) // BAUD)]

@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from particlebot.pacing import PacedRunner
+from particlebot.sim.swarm.pacing import PacedRunner
 from tests.host.fakes import wait_until
 
 STEP_S = 0.005

@@ -1,8 +1,10 @@
-"""Emulated 802.15.4 broadcast air between transparent XBees: packetising, loss, delay, pacing.
+"""The one 802.15.4 medium of every simulated swarm: who hears whom, loss, delay, packetisation, the
+radios' buffers and serial lines at 9600 baud, one shared channel.
 
-Times are CPU cycles of the emulated particles (8 MHz, counted from power-on), the clock the
-simavr harnesses share, so that a swarm stepping them in lockstep can stop exactly where
-something happens on the air.
+Times are cycles of the particles' CPU (particlebot.sim.clock: 8 MHz, counted from power-on),
+the one clock a simulated swarm keeps, so that a swarm stepping its particles can stop exactly
+where something happens on the air, whether they are the firmware image in simavr or the
+firmware logic built for the PC.
 
 What a transparent XBee Series 1 does, as modelled here:
 - Bytes its host writes collect in its serial buffer. They leave as one RF packet after RO = 3
@@ -10,12 +12,14 @@ What a transparent XBee Series 1 does, as modelled here:
   collected (see the project's XBee notes).
 - The RF packet occupies the one shared channel for its airtime at 250 kbit/s plus ~20 bytes of
   PHY and MAC framing; a radio that finds the channel busy waits for it (CSMA, no collisions).
-- Every other radio hears it after `delay` more, each copy lost independently with probability
-  `loss` (802.15.4 broadcasts are never acknowledged or retried).
+- Every other radio in the room hears it after `delay` more, each copy lost independently with
+  probability `loss` (802.15.4 broadcasts are never acknowledged or retried).
 - A receiving radio hands the packet to its host over its own 9600-baud serial line, after any
   packet still going out there. A packet that would not fit in the radio's serial buffer
   (`buffer_bytes`) is dropped, as a flooded radio drops.
 The base station's radio sends each frame it is given as one packet, once its bytes are in.
+A host that hands its radio whole frames (the firmware logic on the PC, as main.cpp hands
+Serial1 one frame at a time) times their bytes with a SerialLine.
 """
 
 from __future__ import annotations
@@ -25,7 +29,8 @@ import random
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-CPU_HZ = 8_000_000
+from particlebot.sim.clock import CPU_HZ
+
 BAUD = 9600
 BITS_PER_CHAR = 10  # start bit, 8 data bits, stop bit
 RO_CHARS = 3
@@ -83,6 +88,14 @@ class Reception:
     def delivered(self) -> bool:
         return not (self.lost or self.overflow)
 
+    @property
+    def source(self) -> int:
+        return self.packet.source
+
+    @property
+    def data(self) -> bytes:
+        return self.packet.data
+
     def byte_end(self, index: int) -> int:
         """When byte `index` of the packet has fully reached the receiver's host."""
         if not self.delivered:
@@ -98,10 +111,11 @@ class Reception:
         return self.byte_end(len(self.packet.data) - 1)
 
 
-Deliver = Callable[[int, int, bytes, int], None]
-"""deliver(receiver, source, data, cycle): a packet reaches a host. For particles cycle is when its
-first byte starts on the serial line (the harness paces the rest); for the base station it is
-when the last byte is in."""
+Deliver = Callable[[Reception], None]
+"""deliver(copy): a delivered copy of a packet reaches its receiver's host. A particle's copy is
+handed over at copy.arrival, when its radio has it (an emulated UART paces the bytes itself;
+copy.byte_end(i) says when byte i is in); the base station's at copy.last, when its last byte is
+in."""
 
 Drop = Callable[[AirPacket, int], bool]
 """drop(packet, receiver) -> True loses that copy, on top of the random loss."""
@@ -112,6 +126,27 @@ def _line_end(start_scaled: int, count: int, baud: int) -> int:
     rounding as tools/sim/particle_sim.c, so both agree to the cycle."""
     end_scaled = start_scaled + count * BITS_PER_CHAR * CPU_HZ
     return (end_scaled + baud - 1) // baud
+
+
+class SerialLine:
+    """A host's serial line into its radio at `baud`: what is written leaves one byte after
+    another, 10 bits each, from when the line is free."""
+
+    def __init__(self, baud: int = BAUD) -> None:
+        self.baud = baud
+        self._free_scaled = 0
+
+    def write(self, data: bytes, cycle: int) -> list[int]:
+        """Writes data at cycle; returns the cycle at which each byte has fully reached the
+        radio."""
+        start = max(cycle * self.baud, self._free_scaled)
+        self._free_scaled = start + len(data) * BITS_PER_CHAR * CPU_HZ
+        return [_line_end(start, i + 1, self.baud) for i in range(len(data))]
+
+    @property
+    def free_at(self) -> int:
+        """The cycle at which everything written so far is in."""
+        return (self._free_scaled + self.baud - 1) // self.baud
 
 
 @dataclass
@@ -128,9 +163,7 @@ class _Radio:
 class _Arrival:
     cycle: int
     order: int
-    receiver: int = field(compare=False)
-    source: int = field(compare=False)
-    data: bytes = field(compare=False)
+    copy: Reception = field(compare=False)
 
 
 class Medium:
@@ -173,7 +206,6 @@ class Medium:
         self._radios[BASE] = _Radio(BASE, base_baud)
         self._scheduled: list[tuple[int, int, int, bytes]] = []  # (ready, order, source, data)
         self._arrivals: list[_Arrival] = []
-        self._base_arrivals: list[_Arrival] = []
         self._order = 0
         self._channel_free = 0
         self._base_uart_free = 0
@@ -234,11 +266,7 @@ class Medium:
             ready, _, source, data = heapq.heappop(self._scheduled)
             self._air(ready, source, data)
         while self._arrivals and self._arrivals[0].cycle <= cycle:
-            arrival = heapq.heappop(self._arrivals)
-            self.deliver(arrival.receiver, arrival.source, arrival.data, arrival.cycle)
-        while self._base_arrivals and self._base_arrivals[0].cycle <= cycle:
-            arrival = heapq.heappop(self._base_arrivals)
-            self.deliver(BASE, arrival.source, arrival.data, arrival.cycle)
+            self.deliver(heapq.heappop(self._arrivals).copy)
 
     def forget(self) -> None:
         """Drops the packet and reception history (long runs keep memory bounded)."""
@@ -276,6 +304,7 @@ class Medium:
         start_scaled = max(arrival * radio.baud, radio.line_free_scaled)
         backlog = (start_scaled - arrival * radio.baud) / (BITS_PER_CHAR * CPU_HZ)
         overflow = not lost and backlog + len(packet.data) > self.buffer_bytes
+        copy = Reception(packet, receiver, arrival, lost, overflow, start_scaled, radio.baud)
         if lost:
             self.copies_lost += 1
         elif overflow:
@@ -283,18 +312,7 @@ class Medium:
         else:
             radio.line_free_scaled = start_scaled + len(packet.data) * BITS_PER_CHAR * CPU_HZ
             self._order += 1
-            if receiver == BASE:
-                last = _line_end(start_scaled, len(packet.data), radio.baud)
-                heapq.heappush(
-                    self._base_arrivals,
-                    _Arrival(last, self._order, BASE, packet.source, packet.data),
-                )
-            else:
-                heapq.heappush(
-                    self._arrivals,
-                    _Arrival(arrival, self._order, receiver, packet.source, packet.data),
-                )
+            due = copy.last if receiver == BASE else arrival
+            heapq.heappush(self._arrivals, _Arrival(due, self._order, copy))
         if self.keep_history:
-            self.receptions.append(
-                Reception(packet, receiver, arrival, lost, overflow, start_scaled, radio.baud)
-            )
+            self.receptions.append(copy)

@@ -1,232 +1,219 @@
-"""Several emulated particles (the real ELF in simavr) in a light field, joined by emulated air.
+"""A simulated swarm of particles running our firmware: one clock stepping the world, the particles
+(native logic or emulated image) and the air, with the base station's radio on that air.
 
-EmulatedSwarm runs one tools/sim/particle_sim process per particle and steps them in lockstep:
-each step runs every particle to the same cycle, at most `quantum_us` ahead and never past the
-next moment the Medium must act (a packet going on the air, a packet reaching a particle), so
-every byte reaches every radio at the cycle the model says. The processes run their steps in
-parallel. BaseStation is the base station's end of it for tests and benchmarks; the console
-reaches a swarm through particlebot.radio.emulated.
+Each step runs the particles to the next cycle where something must happen (a tick of the native
+logic; a quantum of the emulated image, or sooner where the air acts), hands the bytes they wrote
+to their radios, lets the air deliver what is due (to the particles, to the base station), and
+every 10 ms of the world's time steps the world with the radius each servo gives: their bodies
+move, and the photocells read the light where the bodies now are.
 """
 
 from __future__ import annotations
 
 import math
-import struct
 import threading
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
+from collections.abc import Callable
+from dataclasses import dataclass
 from types import TracebackType
-from typing import Self
+from typing import Any, Self
 
-from particlebot.pacing import Paced, PacedRunner
-from particlebot.protocol import (
-    BASE_STATION_ID,
-    BROADCAST_ID,
-    PARAM_SPECS,
-    DecodeStats,
-    Frame,
-    Message,
-    Param,
-    Ping,
-    Status,
-    StreamDecoder,
-    crc16,
-    encode_frame,
+import numpy as np
+
+from particlebot.logs.world import bodies_record, radii_record, scene_record
+from particlebot.protocol import DecodeStats, Frame, StreamDecoder
+from particlebot.sim.air.medium import BASE, NOISE, Medium, Reception
+from particlebot.sim.clock import CPU_HZ, cycles, seconds
+from particlebot.sim.particles.emulated.particles import EmulatedParticles
+from particlebot.sim.particles.interface import FirmwareParticles
+from particlebot.sim.particles.model.controller import Controller, FloatArray, WorldView
+from particlebot.sim.particles.native.particles import (
+    NativeParticles,
+    ParticleFactory,
+    native_factory,
 )
-from particlebot.sim.harness import CPU_HZ, ParticleSim, default_elf
-from particlebot.sim.medium import BASE, BAUD, DEFAULT_BUFFER_BYTES, NOISE, AirPacket, Medium
-from particlebot.sim.world.light import ADC_FULL_SCALE, Lamp, LightField
+from particlebot.sim.scenarios.build import build_world
+from particlebot.sim.swarm.config import TRUTH_BODIES_S, TRUTH_RADII_S, Level, SwarmConfig
+from particlebot.sim.swarm.pacing import Paced, PacedRunner
+from particlebot.sim.world.light import LightField, ShadowMode
 from particlebot.sim.world.photocells import Photocells
 
-AVCC_MV = 3300
 PACED_STEP_S = 0.01
-"""Emulated time one call of the wall-clock pacing covers, at most."""
-MAX_QUANTUM_US = 3000
-"""A particle's byte needs RO (3 characters) of silence plus its airtime before anyone can hear
-it; steps shorter than that let no effect reach another particle within the same step."""
-
-# EEPROM layout of firmware/lib/settings/settings.h (version 1): magic, version, parameter
-# count, id, resets, last reset cause, one int32 per parameter id below 64, CRC-16 of it all.
-_EEPROM_MAGIC = b"PB"
-_EEPROM_VERSION = 1
-_EEPROM_PARAM_SLOTS = 64
-
-
-def eeprom_image(particle_id: int, params: Mapping[Param, int] | None = None) -> bytes:
-    """A settings block as the firmware stores it: this id, the defaults but for params, no
-    resets counted yet. The firmware replaces a block it does not recognise by the defaults and
-    the unassigned id, which the swarm's tests would notice at once."""
-    # Slots of ids the protocol lacks keep a blank chip's 0xFF (the CRC covers them anyway).
-    values = [-1] * _EEPROM_PARAM_SLOTS
-    for param, spec in PARAM_SPECS.items():
-        values[int(param)] = spec.default
-    for param, value in (params or {}).items():
-        spec = PARAM_SPECS[Param(param)]
-        if not spec.min <= value <= spec.max:
-            raise ValueError(f"{Param(param).name}={value} is outside {spec.min}..{spec.max}")
-        values[int(param)] = value
-    block = _EEPROM_MAGIC + bytes([_EEPROM_VERSION, len(PARAM_SPECS), particle_id, 0, 0])
-    block += struct.pack(f"<{_EEPROM_PARAM_SLOTS}i", *values)
-    return block + struct.pack("<H", crc16(block))
-
-
-def light_to_millivolts(value: float) -> int:
-    """The divider voltage that makes an eq. 11 reading of value (on a 1023 scale) at 3.3 V."""
-    return round(min(max(value, 0.0), ADC_FULL_SCALE) * AVCC_MV / ADC_FULL_SCALE)
-
-
-def node_name(index: int) -> str:
-    """The emulated XBee's 64-bit address (Digi's OUI, then the particle's number)."""
-    return f"0013A200{index + 1:08X}"
-
-
-@dataclass(frozen=True)
-class SwarmConfig:
-    count: int = 5
-    lamp: Lamp = field(default_factory=Lamp)
-    start: float = 0.10
-    """Ground distance (m) from the lamp's foot to the nearest particle's centre."""
-    spacing: float = 0.155
-    """Centre-to-centre distance (m) along the line away from the lamp."""
-    positions: Sequence[tuple[float, float]] | None = None
-    """(x, y) of each particle in metres; overrides start and spacing."""
-    first_id: int = 1
-    params: Mapping[Param, int] = field(default_factory=dict)
-    """Parameter values preset in every particle's EEPROM."""
-    loss: float = 0.0
-    """Probability that one receiver misses one packet."""
-    delay_us: float = 0.0
-    """Added to every packet's airtime before receivers have it."""
-    buffer_bytes: int = DEFAULT_BUFFER_BYTES
-    """A radio's buffer towards its host: a packet that does not fit is dropped."""
-    base_baud: int = BAUD
-    """The base station radio's serial rate (particles' radios run at 9600)."""
-    seed: int = 1
-    """Seeds the losses and, with each particle's index, what its firmware seeds itself from."""
-    quantum_us: float = 2000.0
-    """Longest lockstep step; at most MAX_QUANTUM_US, so stepping never delays a delivery."""
-    elf: Path | None = None
-    """The firmware image (default: build/firmware/particle.elf)."""
-    fault_elf: Sequence[int] = ()
-    """Indices of particles that run build/firmware/particle-faults.elf instead."""
-    harness: Path | None = None
-    keep_history: bool = True
-    """Keep every UART byte, servo pulse and packet (tests); off, memory stays bounded."""
-    photocell_spread: float = 0.0
-    """0: every photocell the ideal one; s: gamma within 1 +- s and so on (Photocells.spread)."""
-
-
-@dataclass(frozen=True)
-class HeardFrame:
-    """A frame the base station received, when its last byte was in, and from which radio."""
-
-    time_s: float
-    source: int
-    frame: Frame
-
-
-BROADCAST_ANSWERS_S = 0.7
-"""A particle answers a broadcast PING in a random one of 10 slots of 60 ms while it knows no group
-size (firmware/lib/particle/particle.h), so that a swarm's answers do not all reach the base
-station's radio at once; the last one is in within this (a STATUS takes 54 ms at 9600 baud)."""
+"""Simulated time one call of the wall-clock pacing covers, at most."""
+LIGHT_MOVE_M = 0.0005
+"""A particle's photocells are read again once its body moved this far (the light changes by
+well under a count over half a millimetre)."""
+HELD_RADIUS_M = 0.0005
+"""A commanded radius this far above the contracted one means the particle moves by itself (the
+first servo steps of a cycle, or of a servo hold, go further)."""
 
 BaseListener = Callable[[int, bytes, float], None]
 """listener(source_index, data, time_s): a packet the base station's radio hands over."""
+TruthListener = Callable[[dict[str, Any], float], None]
+"""listener(record, time_s): the world's truth (particlebot.logs.world records) at time_s."""
 
 
-class EmulatedSwarm(Paced):
-    """Particles in a line from a lamp (or at given positions), each the real firmware image."""
+@dataclass(frozen=True)
+class ParticleSnapshot:
+    """Where a particle's body is, as of the latest world step."""
 
-    def __init__(self, config: SwarmConfig | None = None) -> None:
-        config = config or SwarmConfig()
-        if config.count < 1:
-            raise ValueError("a swarm needs at least one particle")
-        if not 1 <= config.first_id <= 253 - (config.count - 1):
-            raise ValueError("particle ids must stay within 1..253")
-        if not 0 < config.quantum_us <= MAX_QUANTUM_US:
-            raise ValueError(f"quantum_us must be in (0, {MAX_QUANTUM_US}]")
+    index: int
+    id: int
+    x: float
+    y: float
+    ground_distance: float
+    """From the lamp's foot (m)."""
+    radius_um: int
+    """Its body's radius."""
+
+
+class FirmwareRadii(Controller):
+    """The World's controller when particles run the firmware: each world step the swarm writes
+    the radius every particle's servo gives into `radii` (NaN: a body no servo drives, which
+    holds its radius)."""
+
+    def __init__(self) -> None:
+        self.radii = np.zeros(0)
+
+    def bind(self, count: int, rng: np.random.Generator) -> None:
+        self.radii = np.full(count, np.nan)
+
+    def command(self, view: WorldView, out: FloatArray) -> None:
+        out[:] = self.radii
+
+
+class SimSwarm(Paced):
+    """Particles running our firmware in the world of a scenario, on one 802.15.4 air.
+
+    The scenario places the robot's particles (indices 0..K-1, ids first_id..), the lamp and the
+    obstacles; SwarmConfig.level says whether each particle is the native logic or the emulated
+    image. step()/run_for() advance it from the caller's thread; start(speed) runs it on a
+    thread of its own, `speed` times faster than real time (math.inf: flat out).
+    """
+
+    def __init__(
+        self, config: SwarmConfig | None = None, *, factory: ParticleFactory = native_factory
+    ) -> None:
+        """factory: makes each native particle (tests give one that misbehaves)."""
+        config = config if config is not None else SwarmConfig()
         self.config = config
-        cells = None
-        if config.photocell_spread:
-            cells = Photocells.spread(config.count, config.photocell_spread, config.seed)
-        self.light = LightField(config.lamp, photocells=cells)
-        if config.positions is not None:
-            if len(config.positions) != config.count:
-                raise ValueError("one position per particle")
-            self.positions = [(float(x), float(y)) for x, y in config.positions]
-        else:
-            lamp = config.lamp
-            self.positions = [
-                (lamp.x + config.start + i * config.spacing, lamp.y) for i in range(config.count)
-            ]
-        self.ids = [config.first_id + i for i in range(config.count)]
-        self.medium = Medium(
-            config.count,
-            self._deliver,
-            loss=config.loss,
-            delay_us=config.delay_us,
-            seed=config.seed,
-            base_baud=config.base_baud,
-            buffer_bytes=config.buffer_bytes,
-            keep_history=config.keep_history,
-        )
-        self.cycle = 0
-        self._quantum = round(config.quantum_us * CPU_HZ / 1_000_000)
-        self._base_listeners: list[BaseListener] = []
-        self._inbox: list[bytes] = []
-        self._inbox_lock = threading.Lock()
-        self._seen: list[int] = []
-        self.sims: list[ParticleSim] = []
-        self._runner = PacedRunner(
-            lambda: self.time_s,
-            self._advance,
-            name="emulated-swarm",
-            step_s=PACED_STEP_S,
-            join_timeout_s=10.0,
-        )
+        self._drive = FirmwareRadii()
+        built = build_world(config.resolved_scenario(), controller=self._drive)
+        self.world = built.world
+        self.scenario = built.scenario
+        robot = built.particles
+        if robot < 1:
+            raise ValueError("a swarm needs at least one particle")
+        if not 1 <= config.first_id <= 253 - (robot - 1):
+            raise ValueError("particle ids must stay within 1..253")
+        ids = [config.first_id + i for i in range(robot)]
+        self.particles = _particles(config, ids, factory)
         try:
-            for index in range(config.count):
-                elf = default_elf(faults=True) if index in config.fault_elf else config.elf
-                sim = ParticleSim(
-                    elf,
-                    harness=config.harness,
-                    eeprom=eeprom_image(self.ids[index], config.params),
-                    light_mv=self.sensor_millivolts(index),
-                    # The firmware seeds its random numbers from this: every particle differs.
-                    noise_mv=250 + (config.seed * 37 + index * 11) % 200,
-                )
-                self.sims.append(sim)
-                self._seen.append(0)
+            self.air = Medium(
+                robot,
+                self._deliver,
+                loss=config.loss,
+                delay_us=config.delay_us,
+                seed=config.seed,
+                base_baud=config.base_baud,
+                buffer_bytes=config.buffer_bytes,
+                keep_history=config.keep_history,
+            )
+            cells = None
+            if config.photocell_spread:
+                cells = Photocells.spread(robot, config.photocell_spread, config.seed)
+            self.light = LightField(
+                self.world.lamp, noise=config.noise, seed=config.seed, photocells=cells
+            )
+            self.cycle = 0
+            self._robot = robot
+            self._world_cycles = cycles(self.world.params.dt)
+            if abs(self._world_cycles - self.world.params.dt * CPU_HZ) > 1e-6:
+                raise ValueError("the world's time step must be a whole number of CPU cycles")
+            self._next_world = self._world_cycles
+            self._world_steps = 0
+            self._bodies_every = max(1, round(TRUTH_BODIES_S / self.world.params.dt))
+            self._radii_every = max(1, round(TRUTH_RADII_S / self.world.params.dt))
+            self._hands_on = False
+            self._lock = threading.Lock()
+            self._inbox: list[bytes] = []
+            self._base_listeners: list[BaseListener] = []
+            self._truth_listeners: list[TruthListener] = []
+            self._light_x = np.full(robot, np.nan)
+            self._light_y = np.full(robot, np.nan)
+            self._dark = np.zeros(robot, dtype=np.bool_)
+            self._commanded = self.particles.radii_m()
+            self._snapshot: list[ParticleSnapshot] = []
+            self._update_light(force=True)
+            self._take_snapshot()
+            self._runner = PacedRunner(
+                lambda: self.time_s,
+                self._advance,
+                name=f"{self.particles.level}-swarm",
+                step_s=PACED_STEP_S,
+                join_timeout_s=10.0,
+            )
         except BaseException:
-            self.close()
+            self.particles.close()
             raise
 
-    # ---- the world ---------------------------------------------------------------------------
+    # ---- what is where -----------------------------------------------------------------------
+
+    @property
+    def ids(self) -> list[int]:
+        return self.particles.ids
+
+    @property
+    def count(self) -> int:
+        return self._robot
+
+    @property
+    def level(self) -> Level:
+        return self.config.level
+
+    @property
+    def native(self) -> NativeParticles:
+        """The particles, when they are the firmware logic (TypeError otherwise)."""
+        if not isinstance(self.particles, NativeParticles):
+            raise TypeError("these particles are not the native firmware logic")
+        return self.particles
+
+    @property
+    def emulated(self) -> EmulatedParticles:
+        """The particles, when they are the emulated image (TypeError otherwise)."""
+        if not isinstance(self.particles, EmulatedParticles):
+            raise TypeError("these particles are not the emulated image")
+        return self.particles
 
     @property
     def time_s(self) -> float:
-        return self.cycle / CPU_HZ
+        """Simulated seconds since the particles were switched on."""
+        return seconds(self.cycle)
 
-    def sensor_values(self, index: int) -> list[int]:
-        """The six readings (0..1023) the light field gives particle index where it stands."""
-        x, y = self.positions[index]
-        return self.light.sensor_values(x, y, particle=index)
-
-    def sensor_millivolts(self, index: int) -> list[int]:
-        return [light_to_millivolts(v) for v in self.sensor_values(index)]
-
-    def move(self, index: int, x: float, y: float) -> None:
-        """Puts particle index at (x, y); its photocells see the new light from now on."""
-        self.positions[index] = (x, y)
-        self.sims[index].set_light_mv(self.sensor_millivolts(index))
-
-    def node_name(self, index: int) -> str:
-        return "noise" if index == NOISE else node_name(index)
+    @property
+    def t(self) -> float:
+        return self.time_s
 
     def epoch(self, time_s: float | None = None) -> float:
         """Simulated time as seconds since the Unix epoch (what radio packets are stamped with)."""
         return self._runner.epoch(time_s)
+
+    def node_name(self, index: int) -> str:
+        return "noise" if index == NOISE else self.particles.node_name(index)
+
+    def snapshot(self) -> list[ParticleSnapshot]:
+        """Ids, positions and radii as of the latest world step; safe from any thread."""
+        with self._lock:
+            return list(self._snapshot)
+
+    def place(self, index: int, x: float, y: float) -> None:
+        """Puts particle index at (x, y), as a person would; its photocells see the light there
+        from now on. A person's hands hold the swarm still (the world does not move the bodies,
+        which may have been put down overlapping, as on a calibration's ring) until a particle
+        moves by itself. Call it from the thread that steps the swarm, or while none does."""
+        self.world.place(index, x, y)
+        self._hands_on = True
+        self._update_light(force=True)
+        self._take_snapshot()
 
     # ---- the air -----------------------------------------------------------------------------
 
@@ -237,114 +224,224 @@ class EmulatedSwarm(Paced):
     def send_from_base(self, data: bytes) -> None:
         """The base station writes one frame to its radio; it goes out at the next step. Safe
         from any thread."""
-        with self._inbox_lock:
+        with self._lock:
             self._inbox.append(bytes(data))
 
     def inject(self, data: bytes, at_s: float | None = None) -> None:
         """Puts foreign bytes on the air (at at_s, default now), heard by every radio."""
-        cycle = self.cycle if at_s is None else max(self.cycle, round(at_s * CPU_HZ))
-        self.medium.inject(data, cycle)
+        cycle = self.cycle if at_s is None else max(self.cycle, cycles(at_s))
+        self.air.inject(data, cycle)
 
-    def _deliver(self, receiver: int, source: int, data: bytes, cycle: int) -> None:
-        if receiver == BASE:
+    def _deliver(self, copy: Reception) -> None:
+        if copy.receiver == BASE:
+            at = seconds(copy.last)
             for listener in self._base_listeners:
-                listener(source, data, cycle / CPU_HZ)
+                listener(copy.source, copy.data, at)
         else:
-            self.sims[receiver].send_uart(data)
+            self.particles.receive(copy)
 
     def received(
-        self, index: int, *, until_s: float | None = None, silence_s: float | None = 0.1
+        self, index: int, *, until_s: float | None = None, silence_s: float | None = None
     ) -> tuple[list[tuple[float, Frame]], DecodeStats]:
         """What particle index's serial port got (needs keep_history), decoded as one stream as
         its firmware does (a transparent radio gives no sender): every frame with the time its
-        last byte was in, and the decoder's counters. A partial frame is dropped after
-        silence_s without a byte, like the firmware parser's timeout (None: never)."""
+        last byte was in, and the decoder's counters. A partial frame is dropped after silence_s
+        without a byte (default: the firmware parser's own timeout)."""
+        if silence_s is None:
+            from particlebot.firmware.native import firmware_constants
+
+            silence_s = firmware_constants().frame_timeout_ms / 1000
         decoder = StreamDecoder()
         frames: list[tuple[float, Frame]] = []
         end = math.inf if until_s is None else until_s * CPU_HZ
         copies = sorted(
-            (r for r in self.medium.receptions if r.receiver == index and r.delivered),
+            (r for r in self.air.receptions if r.receiver == index and r.delivered),
             key=lambda r: r.line_start,
         )
         last_byte: int | None = None
         for copy in copies:
-            for i, value in enumerate(copy.packet.data):
+            for i, value in enumerate(copy.data):
                 at = copy.byte_end(i)
                 if at > end:
                     return frames, decoder.stats
-                if (
-                    silence_s is not None
-                    and last_byte is not None
-                    and at - last_byte > silence_s * CPU_HZ
-                ):
-                    frames += [(last_byte / CPU_HZ, f) for f in decoder.flush()]
-                frames += [(at / CPU_HZ, f) for f in decoder.feed(bytes([value]))]
+                if last_byte is not None and at - last_byte > silence_s * CPU_HZ:
+                    frames += [(seconds(last_byte), f) for f in decoder.flush()]
+                frames += [(seconds(at), f) for f in decoder.feed(bytes([value]))]
                 last_byte = at
         return frames, decoder.stats
+
+    # ---- the truth ---------------------------------------------------------------------------
+
+    def add_truth_listener(self, listener: TruthListener) -> None:
+        """Called (on the stepping thread) with the world's truth: the scene and the bodies now
+        at once, then the bodies every TRUTH_BODIES_S and the commanded radii every
+        TRUTH_RADII_S of simulated time."""
+        with self._lock:
+            snapshot = list(self._snapshot)
+            self._truth_listeners.append(listener)
+        now = self.time_s
+        listener(self._scene(), now)
+        if snapshot:
+            listener(
+                bodies_record(
+                    np.array([p.x for p in snapshot]),
+                    np.array([p.y for p in snapshot]),
+                    np.array([p.radius_um * 1e-6 for p in snapshot]),
+                ),
+                now,
+            )
+
+    def _scene(self) -> dict[str, Any]:
+        world = self.world
+        lamp = world.lamp
+        return scene_record(
+            level=self.particles.level,
+            scenario=self.scenario.name,
+            ids=self.ids,
+            lamp=(lamp.x, lamp.y, lamp.height),
+            rects=[(r.x_min, r.x_max, r.y_min, r.y_max) for r in world.arena.rects],
+            circles=[(c.x, c.y, c.radius) for c in world.arena.circles],
+            objects=[(o.x, o.y, o.radius) for o in world.objects],
+            r_min=world.params.r_min,
+            r_max=world.params.r_max,
+        )
+
+    def _tell(self, record: dict[str, Any]) -> None:
+        with self._lock:
+            listeners = list(self._truth_listeners)
+        now = self.time_s
+        for listener in listeners:
+            listener(record, now)
 
     # ---- stepping ----------------------------------------------------------------------------
 
     def step(self, limit: int | None = None) -> None:
-        """Runs every particle one step ahead (at most a quantum, never past limit)."""
-        target = self.cycle + self._quantum
+        """Runs everything one step ahead: to the particles' next stop, never past the next world
+        step, a moment the air acts on emulated particles, or limit (a cycle)."""
+        particles = self.particles
+        target = min(particles.next_stop(self.cycle), self._next_world)
+        if particles.exact_air:
+            due = self.air.next_event()
+            if due is not None:
+                target = min(target, due)
         if limit is not None:
             target = min(target, limit)
-        due = self.medium.next_event()
-        if due is not None:
-            target = min(target, due)
         target = max(target, self.cycle + 1)
-        with self._inbox_lock:
+        with self._lock:
             inbox, self._inbox = self._inbox, []
         for data in inbox:
-            self.medium.base_send(data, self.cycle)
-        for sim in self.sims:
-            sim.begin_run(target)
-        for sim in self.sims:
-            sim.finish_run()
-        for index, sim in enumerate(self.sims):
-            for byte in sim.uart[self._seen[index] :]:
-                self.medium.uart_byte(index, byte.cycle, byte.value)
-            if self.config.keep_history:
-                self._seen[index] = len(sim.uart)
-            else:
-                sim.forget()
+            self.air.base_send(data, self.cycle)
+        for byte in particles.run_until(target):
+            self.air.uart_byte(byte.index, byte.cycle, byte.value)
         self.cycle = target
-        self.medium.advance(target)
+        self.air.advance(target)
+        while self.cycle >= self._next_world:
+            self._step_world()
+            self._next_world += self._world_cycles
+
+    def _step_world(self) -> None:
+        commanded = self.particles.radii_m()
+        self._commanded = commanded
+        if self._hands_on and bool(np.any(commanded > self.world.params.r_min + HELD_RADIUS_M)):
+            self._hands_on = False  # a particle moves by itself: the person let go
+        if self.config.kinematics and not self._hands_on:
+            self._drive.radii[: self._robot] = commanded
+            self.world.step(1)
+            self._update_light()
+        self._world_steps += 1
+        if self._world_steps % 5 == 0:
+            self._take_snapshot()
+        if not self._truth_listeners:
+            return
+        if self._world_steps % self._radii_every == 0:
+            self._tell(radii_record(commanded))
+        if self._world_steps % self._bodies_every == 0:
+            x, y = self.world.positions()
+            r = self.world.radii()
+            n = self._robot
+            self._tell(bodies_record(x[:n], y[:n], r[:n]))
+
+    def _update_light(self, force: bool = False) -> None:
+        """Gives the photocells of every particle that moved the light where it now is; a
+        particle in an obstacle's shadow (a scenario whose shadows count) reads dark."""
+        n = self._robot
+        x, y = self.world.positions()
+        x, y = x[:n], y[:n]
+        dark = np.zeros(n, dtype=np.bool_)
+        world = self.world
+        if world.shadow != ShadowMode.IGNORE and (world.arena.rects or world.arena.circles):
+            dark = world.arena.shadowed(x, y, world.lamp.x, world.lamp.y)
+        moved = np.hypot(x - self._light_x, y - self._light_y) > LIGHT_MOVE_M
+        moved |= dark != self._dark
+        if force:
+            moved[:] = True
+        which = np.flatnonzero(moved)
+        if which.size == 0:
+            return
+        readings = self.light.sensor_matrix(x[which], y[which], particles=which)
+        readings[dark[which]] = 0
+        for row, index in zip(readings, which, strict=True):
+            self.particles.set_light(int(index), [int(v) for v in row])
+        self._light_x[which] = x[which]
+        self._light_y[which] = y[which]
+        self._dark = dark
+
+    def _take_snapshot(self) -> None:
+        x, y = self.world.positions()
+        r = self.world.radii()
+        lamp = self.world.lamp
+        snapshot = [
+            ParticleSnapshot(
+                index=i,
+                id=particle_id,
+                x=float(x[i]),
+                y=float(y[i]),
+                ground_distance=math.hypot(x[i] - lamp.x, y[i] - lamp.y),
+                radius_um=round(float(r[i]) * 1e6),
+            )
+            for i, particle_id in enumerate(self.ids)
+        ]
+        with self._lock:
+            self._snapshot = snapshot
 
     def run_until(self, time_s: float) -> None:
-        end = round(time_s * CPU_HZ)
-        while self.cycle < end:
-            self.step(end)
+        """Runs to time_s (to the nearest cycle)."""
+        self._run_to(cycles(time_s))
 
     def run_for(self, seconds: float) -> None:
-        self.run_until(self.time_s + seconds)
+        self._run_to(self.cycle + cycles(seconds))
 
     def run_until_true(
         self, condition: Callable[[], bool], timeout_s: float, check_every_s: float = 0.01
     ) -> bool:
         """Runs until condition() holds (checked every check_every_s) or timeout_s pass."""
-        end = self.time_s + timeout_s
+        end = self.cycle + cycles(timeout_s)
+        every = max(1, cycles(check_every_s))
         while not condition():
-            if self.time_s >= end:
+            if self.cycle >= end:
                 return False
-            self.run_until(min(end, self.time_s + check_every_s))
+            self._run_to(min(end, self.cycle + every))
         return True
+
+    def _run_to(self, end: int) -> None:
+        while self.cycle < end:
+            self.step(end)
 
     # ---- running on a thread, paced to the wall clock ----------------------------------------
 
     def _advance(self, target: float) -> bool:
-        if self.time_s >= target:
+        end = cycles(target)
+        if self.cycle >= end:
             return False
         # Short runs keep the console's view of the air fresh and stop() prompt.
-        self.run_until(min(target, self.time_s + PACED_STEP_S))
+        self._run_to(min(end, self.cycle + cycles(PACED_STEP_S)))
         return True
 
     # ---- lifetime ----------------------------------------------------------------------------
 
     def close(self) -> None:
         self.stop()
-        for sim in self.sims:
-            sim.close()
+        self.particles.close()
 
     def __enter__(self) -> Self:
         return self
@@ -358,73 +455,16 @@ class EmulatedSwarm(Paced):
         self.close()
 
 
-class BaseStation:
-    """The base station's end of an EmulatedSwarm, driven from the caller's thread: numbered
-    frames out, every frame heard in (reassembled per radio, as a console does)."""
-
-    def __init__(self, swarm: EmulatedSwarm) -> None:
-        self.swarm = swarm
-        self.seq = 0
-        self.decoder = StreamDecoder()
-        self.heard: list[HeardFrame] = []
-        self.sent: list[tuple[float, bytes]] = []
-        """Each frame sent, with the time it was handed to the base station's radio."""
-        swarm.add_base_listener(self._on_packet)
-
-    def _on_packet(self, source: int, data: bytes, time_s: float) -> None:
-        for frame in self.decoder.feed(data, source):
-            self.heard.append(HeardFrame(time_s, source, frame))
-
-    def send(self, message: Message) -> float:
-        """Broadcasts message from the base station; returns the time it was handed over."""
-        raw = encode_frame(message, BASE_STATION_ID, self.seq)
-        self.seq = (self.seq + 1) % 256
-        self.swarm.send_from_base(raw)
-        self.sent.append((self.swarm.time_s, raw))
-        return self.swarm.time_s
-
-    def frames(
-        self, kind: type[Message] | None = None, since_s: float = 0.0
-    ) -> list[tuple[HeardFrame, Message]]:
-        """Frames heard at or after since_s whose message is a kind (any message if None)."""
-        found = []
-        for heard in self.heard:
-            message = heard.frame.message
-            if heard.time_s < since_s or message is None:
-                continue
-            if kind is None or isinstance(message, kind):
-                found.append((heard, message))
-        return found
-
-    def statuses(self, since_s: float = 0.0) -> dict[int, Status]:
-        """The latest STATUS of each particle id heard since since_s."""
-        latest: dict[int, Status] = {}
-        for heard, message in self.frames(Status, since_s):
-            assert isinstance(message, Status)
-            latest[heard.frame.sender] = message
-        return latest
-
-    def ping_all(
-        self, timeout_s: float = 1.5, ids: Sequence[int] | None = None, attempts: int = 3
-    ) -> dict[int, Status]:
-        """A STATUS from every particle (default: the swarm's ids) asked for now: one broadcast
-        PING, whose answers spread over up to BROADCAST_ANSWERS_S, then PINGs to each silent one
-        (an answer can be lost, or dropped by a full radio buffer), which answer at once. Missing
-        ids did not answer."""
-        wanted = set(self.swarm.ids if ids is None else ids)
-        asked = self.send(Ping(target=BROADCAST_ID))
-        first = min(timeout_s, BROADCAST_ANSWERS_S)
-        waits = [first] + [(timeout_s - first) / max(1, attempts - 1)] * (attempts - 1)
-        for wait_s in waits:
-            self.swarm.run_until_true(lambda: wanted <= set(self.statuses(asked)), wait_s)
-            missing = wanted - set(self.statuses(asked))
-            if not missing:
-                break
-            for particle_id in sorted(missing):
-                self.send(Ping(target=particle_id))
-        return {k: v for k, v in self.statuses(asked).items() if k in wanted}
-
-
-def packet_frames(packet: AirPacket) -> list[Frame]:
-    """The whole frames inside one RF packet (frames split across packets are not counted)."""
-    return StreamDecoder().feed(packet.data)
+def _particles(config: SwarmConfig, ids: list[int], factory: ParticleFactory) -> FirmwareParticles:
+    if config.level is Level.NATIVE:
+        return NativeParticles(ids, params=config.params, seed=config.seed, factory=factory)
+    return EmulatedParticles(
+        ids,
+        params=config.params,
+        seed=config.seed,
+        quantum_us=config.quantum_us,
+        elf=config.elf,
+        fault_elf=config.fault_elf,
+        harness=config.harness,
+        keep_history=config.keep_history,
+    )

@@ -18,8 +18,8 @@ from particlebot.protocol import (
     Status,
     Stop,
 )
-from particlebot.sim import ParticleSim
-from tests.sim.test_smoke import SERVO_JITTER_US, Base
+from particlebot.sim.particles.emulated.harness import ParticleSim
+from tests.sim.particles.emulated.test_smoke import SERVO_JITTER_US, Base
 
 pytestmark = pytest.mark.usefixtures("built_images")
 

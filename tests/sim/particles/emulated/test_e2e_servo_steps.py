@@ -8,6 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from particlebot.firmware.native import settings_image
 from particlebot.protocol import (
     BASE_STATION_ID,
     Intensity,
@@ -18,8 +19,9 @@ from particlebot.protocol import (
     Stop,
     encode_frame,
 )
-from particlebot.sim import CPU_HZ, ParticleSim, ServoPulse, eeprom_image
-from particlebot.sim.servo import STEP_S, cycle_profile_us
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.particles.emulated.harness import ParticleSim, ServoPulse
+from particlebot.sim.particles.emulated.servo import cycle_profile_us, servo_step_s
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -27,6 +29,7 @@ PARTICLE_ID = 1
 ROUND_MS = 200
 # Ten steps a cycle: neighbouring steps then differ by 76 us or more, far beyond the edge jitter
 # (an edge waits while another interrupt finishes), so a repeated or skipped step cannot hide.
+STEP_S = servo_step_s()  # one servo step, as the firmware defines it
 CYCLE_STEPS = 10
 FRAME_CYCLES = round(STEP_S * CPU_HZ)
 # An edge of the pulse waits while another interrupt (Serial1, Timer0) finishes: ~15 us at most.
@@ -43,7 +46,7 @@ PHASES = 10
 
 @pytest.fixture
 def particle() -> Iterator[ParticleSim]:
-    image = eeprom_image(PARTICLE_ID, {Param.ROUND_MS: ROUND_MS})
+    image = settings_image(PARTICLE_ID, {Param.ROUND_MS: ROUND_MS})
     with ParticleSim(eeprom=image, light_mv=(1500, 1600, 1700, 1800, 1900, 2000)) as sim:
         yield sim
 

@@ -16,8 +16,8 @@ from particlebot.firmware import NativeParticle
 from particlebot.fleet import Fleet, ParticleRecord, create_fleet, load_fleet
 from particlebot.protocol import BASE_STATION_ID, DEFINITION_HASH, Param, SetParam, encode_frame
 from particlebot.provision import identity
-from particlebot.sim import default_elf
-from particlebot.sim.boot import boot_and_ping
+from particlebot.sim.particles.emulated.boot import boot_and_ping
+from particlebot.sim.particles.emulated.harness import default_elf
 from tests.host.caterina_emulator import CaterinaEmulator
 
 pytestmark = [

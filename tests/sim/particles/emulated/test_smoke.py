@@ -26,7 +26,7 @@ from particlebot.protocol import (
     StreamDecoder,
     encode_frame,
 )
-from particlebot.sim import ParticleSim, default_elf
+from particlebot.sim.particles.emulated.harness import ParticleSim, default_elf
 
 pytestmark = pytest.mark.usefixtures("built_images")
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from particlebot.sim import ParticleSim, default_elf
+from particlebot.sim.particles.emulated.harness import ParticleSim, default_elf
 
 pytestmark = pytest.mark.usefixtures("built_images")
 

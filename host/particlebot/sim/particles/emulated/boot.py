@@ -19,7 +19,7 @@ from particlebot.protocol import (
     StreamDecoder,
     encode_frame,
 )
-from particlebot.sim.harness import HarnessError, ParticleSim
+from particlebot.sim.particles.emulated.harness import HarnessError, ParticleSim
 
 _BOOT_US = 100_000
 _STEP_US = 100_000

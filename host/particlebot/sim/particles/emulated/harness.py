@@ -17,8 +17,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Self
 
-CPU_HZ = 8_000_000
-"""Clock of the emulated ATmega32U4; every cycle stamp counts these from power-on."""
+from particlebot.sim.clock import CPU_HZ
+
 SENSOR_COUNT = 6
 EEPROM_SIZE = 1024
 FAULT_PIN = ("D", 1)
@@ -26,7 +26,7 @@ FAULT_PIN = ("D", 1)
 MCUSR_POWER_ON = 0x01
 MCUSR_WATCHDOG = 0x08
 
-_REPO_ROOT = Path(__file__).resolve().parents[3]
+_REPO_ROOT = Path(__file__).resolve().parents[5]
 
 
 def default_harness() -> Path:

@@ -1,4 +1,10 @@
-"""Reading a recorded servo pulse train: the contracted width, expansion cycles, frame timing.
+"""The servo of an emulated particle: the radius its pulses give, and reading a recorded pulse
+train (the contracted width, expansion cycles, frame timing).
+
+The servo the simulation assumes is the one the particle's calibration table describes: pulse
+SERVO_CAL_k gives the radius R_min + k/8 (R_max - R_min), linear in between (servo_radius_um).
+A table calibrated on a real particle makes that true of its servo; the default table is what a
+particle ships with.
 
 The firmware outputs one pulse per 50 Hz frame; an edge now and then comes several microseconds
 late because another interrupt was running, so a single pulse can look wider or narrower than
@@ -16,11 +22,16 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from particlebot.protocol import PARAM_SPECS, Param
-from particlebot.sim.harness import ServoPulse
+import numpy as np
 
-STEP_S = 0.020
-"""One servo step (and one 50 Hz frame)."""
+from particlebot.firmware.native import firmware_constants
+from particlebot.protocol import PARAM_SPECS, Param
+from particlebot.sim.particles.emulated.harness import ServoPulse
+
+
+def servo_step_s() -> float:
+    """One servo step (and one 50 Hz frame), as the firmware defines it."""
+    return firmware_constants().servo_step_ms / 1000
 
 
 def median3(widths: Sequence[float]) -> list[float]:
@@ -86,22 +97,40 @@ def bursts(
 
 def period_errors_us(pulses: Sequence[ServoPulse]) -> list[float]:
     """Rising edge to rising edge, minus 20 ms, for each neighbouring pair."""
-    return [(b.start_s - a.start_s - STEP_S) * 1e6 for a, b in itertools.pairwise(pulses)]
+    step_s = servo_step_s()
+    return [(b.start_s - a.start_s - step_s) * 1e6 for a, b in itertools.pairwise(pulses)]
 
 
 def missed_frames(pulses: Sequence[ServoPulse]) -> int:
     """Frames without a pulse: rising edges more than one and a half frames apart."""
     missed = 0
+    step_s = servo_step_s()
     for a, b in itertools.pairwise(pulses):
         gap = b.start_s - a.start_s
-        if gap > 1.5 * STEP_S:
-            missed += round(gap / STEP_S) - 1
+        if gap > 1.5 * step_s:
+            missed += round(gap / step_s) - 1
     return missed
 
 
 def default_servo_table() -> list[int]:
     """SERVO_CAL_0..8 as a particle ships (pulse in us at R_min + i/8 of the stroke)."""
-    return [PARAM_SPECS[Param(int(Param.SERVO_CAL_0) + i)].default for i in range(9)]
+    points = firmware_constants().servo_cal_points
+    return [PARAM_SPECS[Param(int(Param.SERVO_CAL_0) + i)].default for i in range(points)]
+
+
+def servo_radius_um(
+    width_us: float, table: Sequence[int], r_min_um: float, r_max_um: float
+) -> float:
+    """The radius a servo whose true curve is `table` takes at a pulse of width_us: the table
+    read backwards, linear between its points, held at its ends (the body's stops). A table may
+    fall instead of rise (a servo mounted the other way round)."""
+    points = len(table)
+    rising = table[-1] >= table[0]
+    pulses = list(table) if rising else list(reversed(table))
+    position = float(np.interp(width_us, pulses, np.arange(points, dtype=float)))
+    if not rising:
+        position = (points - 1) - position
+    return r_min_um + (r_max_um - r_min_um) * position / (points - 1)
 
 
 def cycle_profile_us(steps: int, table: Sequence[int] | None = None) -> list[float]:

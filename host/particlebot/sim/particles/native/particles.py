@@ -1,0 +1,148 @@
+"""Native particles: one NativeParticle (the firmware's Particle class, through ctypes) each, fed
+and read the way main.cpp feeds and reads it on the chip."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
+from typing import Protocol
+
+import numpy as np
+
+from particlebot.firmware.native import firmware_constants, settings_image
+from particlebot.protocol import Param
+from particlebot.sim.air.medium import Reception, SerialLine
+from particlebot.sim.clock import CYCLES_PER_MS
+from particlebot.sim.particles.interface import FirmwareParticles, FloatArray, SerialByte
+
+TICK_MS = 5
+"""The logic is ticked every 5 ms: the C API's servo steps land on their 20 ms boundaries when it
+is ticked at least that often. A byte from the radio reaches it at the first tick after the
+byte is in (at most 5 ms late)."""
+TICK_CYCLES = TICK_MS * CYCLES_PER_MS
+POWER_ON = 1
+"""MCUSR's power-on flag: what a particle switched on reports as its reset cause."""
+
+
+class FirmwareParticle(Protocol):
+    """What the swarm needs of particlebot.firmware.native.NativeParticle."""
+
+    def set_adc(self, values: list[int]) -> None: ...
+
+    def receive(self, data: bytes) -> None: ...
+
+    def tick(self, now_ms: int) -> None: ...
+
+    def transmit_frame(self) -> bytes: ...
+
+    @property
+    def id(self) -> int: ...
+
+    @property
+    def radius_um(self) -> int: ...
+
+    def close(self) -> None: ...
+
+
+ParticleFactory = Callable[[bytes, int], FirmwareParticle]
+"""factory(eeprom, rng_seed) -> a particle booted from that EEPROM image."""
+
+
+def native_factory(eeprom: bytes, seed: int) -> FirmwareParticle:
+    # Imported here: the module is importable without the native library built.
+    from particlebot.firmware.native import NativeParticle
+
+    particle: FirmwareParticle = NativeParticle(eeprom=eeprom, reset_cause=POWER_ON, rng_seed=seed)
+    return particle
+
+
+class NativeParticles(FirmwareParticles):
+    """K particles of the firmware logic, each booted from an EEPROM that holds its id.
+
+    As main.cpp does, each particle hands its radio one whole frame at a time and then keeps its
+    serial line quiet for the firmware's inter-frame gap, so that its XBee sends every frame as an
+    RF packet of its own; the bytes leave at 9600 baud (sim.air.SerialLine).
+    """
+
+    level = "native"
+    exact_air = False
+
+    def __init__(
+        self,
+        ids: Sequence[int],
+        *,
+        params: Mapping[Param, int] | None = None,
+        seed: int = 1,
+        factory: ParticleFactory = native_factory,
+    ) -> None:
+        super().__init__(ids)
+        constants = firmware_constants()
+        self._gap_cycles = constants.inter_frame_gap_ms * CYCLES_PER_MS
+        self.firmware: list[FirmwareParticle] = []
+        try:
+            for index, particle_id in enumerate(self.ids):
+                image = settings_image(particle_id, params)
+                self.firmware.append(factory(image, seed * 1000 + index))
+        except BaseException:
+            self.close()
+            raise
+        self._lines = [SerialLine() for _ in self.ids]
+        self._quiet_until = [0] * self.count
+        self._inbox: list[deque[tuple[int, bytes]]] = [deque() for _ in self.ids]
+        self._next_tick = 0
+        self._radii = np.array([p.radius_um for p in self.firmware], dtype=np.float64) * 1e-6
+
+    def node_name(self, index: int) -> str:
+        return f"virtual-{index + 1:02d}"
+
+    def next_stop(self, cycle: int) -> int:
+        return max(self._next_tick, cycle + 1)
+
+    def run_until(self, cycle: int) -> list[SerialByte]:
+        out: list[SerialByte] = []
+        while self._next_tick <= cycle:
+            now = self._next_tick
+            now_ms = (now // CYCLES_PER_MS) & 0xFFFFFFFF
+            for index, particle in enumerate(self.firmware):
+                particle.tick(now_ms)
+                inbox = self._inbox[index]
+                while inbox and inbox[0][0] <= now:
+                    particle.receive(inbox.popleft()[1])
+                if now >= self._quiet_until[index]:
+                    frame = particle.transmit_frame()
+                    if frame:
+                        ends = self._lines[index].write(frame, now)
+                        out.extend(
+                            SerialByte(index, c, v) for c, v in zip(ends, frame, strict=True)
+                        )
+                        self._quiet_until[index] = ends[-1] + self._gap_cycles
+            self._next_tick = now + TICK_CYCLES
+        return out
+
+    def receive(self, copy: Reception) -> None:
+        inbox = self._inbox[copy.receiver]
+        data = copy.data
+        # Bytes reach the logic at the first tick after each is in; grouped by that tick.
+        first_tick = -1
+        start = 0
+        for i in range(len(data)):
+            tick = -(-copy.byte_end(i) // TICK_CYCLES) * TICK_CYCLES
+            if tick != first_tick:
+                if i > start:
+                    inbox.append((first_tick, data[start:i]))
+                first_tick, start = tick, i
+        inbox.append((first_tick, data[start:]))
+
+    def set_light(self, index: int, readings: Sequence[int]) -> None:
+        self.firmware[index].set_adc([int(v) for v in readings])
+
+    def radii_m(self) -> FloatArray:
+        radii = self._radii
+        for index, particle in enumerate(self.firmware):
+            radii[index] = particle.radius_um * 1e-6
+        return radii.copy()
+
+    def close(self) -> None:
+        for particle in self.firmware:
+            particle.close()
+        self.firmware = []

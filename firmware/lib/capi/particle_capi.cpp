@@ -202,10 +202,6 @@ uint8_t pb_s_n_max(void) {
   return pb::kMaxSn;
 }
 
-uint32_t pb_group_count_max(void) {
-  return pb::kMaxGroupCount;
-}
-
 void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint8_t wave_size_param,
                    uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
                    uint32_t out[3]) {

@@ -96,8 +96,6 @@ uint16_t pb_servo_step_ms(void);
 uint16_t pb_adc_full_scale(void);
 // The largest S_n any method gives.
 uint8_t pb_s_n_max(void);
-// N_w of methods B and C with GROUPS = 0 is one group per particle, capped at this.
-uint32_t pb_group_count_max(void);
 
 // The epoch a particle plans when its round gives s_n and it heard group_size particles (itself
 // included): out[0] first cycle after the common start, out[1] pause t_p, out[2] epoch length,

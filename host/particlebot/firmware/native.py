@@ -409,7 +409,6 @@ _MODEL_SIGNATURES: dict[str, tuple[object, list[object]]] = {
     "pb_servo_step_ms": (ctypes.c_uint16, []),
     "pb_adc_full_scale": (ctypes.c_uint16, []),
     "pb_s_n_max": (ctypes.c_uint8, []),
-    "pb_group_count_max": (ctypes.c_uint32, []),
     "pb_plan_epoch": (
         None,
         [
@@ -445,7 +444,6 @@ class FirmwareConstants:
     servo_step_ms: int  # one servo step; a cycle of cycle_steps steps lasts T
     adc_full_scale: int  # highest reading; a sensor reading it or 0 is left out as faulty
     s_n_max: int  # every estimator saturates S_n here
-    group_count_max: int  # cap on N_w of methods B and C with GROUPS = 0
     frame_timeout_ms: int  # a partial frame this old is dropped by the particle's parser
     ping_slot_ms: int  # a broadcast request is answered in a random slot of this length...
     ping_slots_unknown: int  # ...one of this many while the particle knows no group size
@@ -467,7 +465,6 @@ def firmware_constants() -> FirmwareConstants:
             servo_step_ms=int(lib.pb_servo_step_ms()),
             adc_full_scale=int(lib.pb_adc_full_scale()),
             s_n_max=int(lib.pb_s_n_max()),
-            group_count_max=int(lib.pb_group_count_max()),
             frame_timeout_ms=int(lib.pb_frame_timeout_ms()),
             ping_slot_ms=int(lib.pb_ping_slot_ms()),
             ping_slots_unknown=int(lib.pb_ping_slots_unknown()),

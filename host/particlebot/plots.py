@@ -697,7 +697,8 @@ def draw_top_view(ax: Any, world: WorldTrack, colour_of: dict[int, Any]) -> None
     margin = 2 * float(world.r.max())
     ax.set_xlim(min(xs_all) - margin, max(xs_all) + margin)
     ax.set_ylim(min(ys_all) - margin, max(ys_all) + margin)
-    ax.set_aspect("equal", adjustable="datalim")
+    # The floor's true proportions, in a panel as tall as they need.
+    ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, alpha=0.3)

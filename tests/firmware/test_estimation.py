@@ -216,9 +216,8 @@ def test_with_groups_0_a_blobs_rows_move_together() -> None:
     ground = [0.50, 0.53, 0.655, 0.68, 0.81]
     readings = [reading_on_floor(d) for d in ground]
     for method in (Method.LINEAR, Method.NONLINEAR):
-        assert [
-            estimate(method, v, others_than(readings, k)) for k, v in enumerate(readings)
-        ] == [1, 1, 2, 2, 3]
+        s_n = [estimate(method, v, others_than(readings, k)) for k, v in enumerate(readings)]
+        assert s_n == [1, 1, 2, 2, 3]
 
 
 def test_nonlinear_estimation_places_a_line_of_particles_exactly() -> None:

@@ -95,6 +95,15 @@ void pb_particle_tick(pb_particle *particle, uint32_t now_ms) {
   if (elapsed == 0) p.tick(now_ms);
 }
 
+void pb_particles_tick(pb_particle *const *particles, size_t count, uint32_t now_ms,
+                       uint32_t *radius_um, uint8_t *tx_waiting) {
+  for (size_t i = 0; i < count; ++i) {
+    pb_particle_tick(particles[i], now_ms);
+    radius_um[i] = particles[i]->particle.radius_um();
+    tx_waiting[i] = particles[i]->particle.tx_pending() > 0 ? 1 : 0;
+  }
+}
+
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity) {
   return particle->particle.take_tx(out, capacity);
 }

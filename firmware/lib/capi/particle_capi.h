@@ -40,6 +40,12 @@ void pb_particle_receive(pb_particle *particle, const uint8_t *bytes, size_t cou
 // simulated time for servo steps to fall on their 20 ms boundaries.
 void pb_particle_tick(pb_particle *particle, uint32_t now_ms);
 
+// Many particles at once, for swarms (one call instead of three per particle and tick): each of
+// particles[0..count) is ticked to now_ms as pb_particle_tick does, then radius_um[i] receives its
+// radius and tx_waiting[i] whether a frame waits in its Serial1 queue (1) or not (0).
+void pb_particles_tick(pb_particle *const *particles, size_t count, uint32_t now_ms,
+                       uint32_t *radius_um, uint8_t *tx_waiting);
+
 // Moves up to capacity bytes of the frame at the head of the Serial1 queue into out and returns
 // how many; it never goes past that frame's end, so a call with room for a whole frame
 // (PB_MAX_FRAME) takes exactly one frame, as main.cpp hands one frame at a time to Serial1.

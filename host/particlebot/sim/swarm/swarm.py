@@ -20,7 +20,7 @@ from typing import Any, Self
 import numpy as np
 
 from particlebot.logs.world import bodies_record, radii_record, scene_record
-from particlebot.protocol import DecodeStats, Frame, StreamDecoder
+from particlebot.protocol import UNASSIGNED_ID, DecodeStats, Frame, StreamDecoder
 from particlebot.sim.air.medium import BASE, NOISE, Medium, Reception
 from particlebot.sim.clock import CPU_HZ, cycles, seconds
 from particlebot.sim.particles.emulated.particles import EmulatedParticles
@@ -37,6 +37,8 @@ from particlebot.sim.swarm.pacing import Paced, PacedRunner
 from particlebot.sim.world.light import LightField, ShadowMode
 from particlebot.sim.world.photocells import Photocells
 
+MAX_ID = UNASSIGNED_ID - 1
+"""The highest particle id (254 is the unassigned one, 255 broadcast)."""
 PACED_STEP_S = 0.01
 """Simulated time one call of the wall-clock pacing covers, at most."""
 LIGHT_MOVE_M = 0.0005
@@ -103,9 +105,11 @@ class SimSwarm(Paced):
         robot = built.particles
         if robot < 1:
             raise ValueError("a swarm needs at least one particle")
-        if not 1 <= config.first_id <= 253 - (robot - 1):
-            raise ValueError("particle ids must stay within 1..253")
-        ids = [config.first_id + i for i in range(robot)]
+        if not 1 <= config.first_id <= MAX_ID:
+            raise ValueError(f"the first particle id must be 1..{MAX_ID}")
+        # Ids are one byte: a swarm of more than 253 particles repeats them (the base station
+        # cannot tell such particles apart; the world and the air can).
+        ids = [(config.first_id - 1 + i) % MAX_ID + 1 for i in range(robot)]
         self.particles = _particles(config, ids, factory)
         try:
             self.air = Medium(

@@ -9,10 +9,15 @@ from typing import Protocol
 
 import numpy as np
 
-from particlebot.firmware.native import firmware_constants, settings_image
+from particlebot.firmware.native import (
+    NativeBatch,
+    NativeParticle,
+    firmware_constants,
+    settings_image,
+)
 from particlebot.protocol import Param
-from particlebot.sim.air.medium import Reception, SerialLine
-from particlebot.sim.clock import CYCLES_PER_MS
+from particlebot.sim.air.medium import BITS_PER_CHAR, Reception, SerialLine
+from particlebot.sim.clock import CPU_HZ, CYCLES_PER_MS
 from particlebot.sim.particles.interface import FirmwareParticles, FloatArray, SerialByte
 
 TICK_MS = 5
@@ -89,8 +94,16 @@ class NativeParticles(FirmwareParticles):
         self._lines = [SerialLine() for _ in self.ids]
         self._quiet_until = [0] * self.count
         self._inbox: list[deque[tuple[int, bytes]]] = [deque() for _ in self.ids]
+        self._busy: set[int] = set()
+        """Particles with bytes from their radio still to take."""
         self._next_tick = 0
         self._radii = np.array([p.radius_um for p in self.firmware], dtype=np.float64) * 1e-6
+        # The firmware logic itself (not a stand-in of a test): all ticked in one call.
+        self._batch = (
+            NativeBatch(self.firmware)  # type: ignore[arg-type]
+            if all(type(p) is NativeParticle for p in self.firmware)
+            else None
+        )
 
     def node_name(self, index: int) -> str:
         return f"virtual-{index + 1:02d}"
@@ -103,40 +116,60 @@ class NativeParticles(FirmwareParticles):
         while self._next_tick <= cycle:
             now = self._next_tick
             now_ms = (now // CYCLES_PER_MS) & 0xFFFFFFFF
-            for index, particle in enumerate(self.firmware):
-                particle.tick(now_ms)
+            if self._batch is not None:
+                self._batch.tick(now_ms)
+                waiting = self._batch.tx_waiting
+                speakers = {i for i in range(self.count) if waiting[i]}
+            else:
+                for particle in self.firmware:
+                    particle.tick(now_ms)
+                speakers = set(range(self.count))
+            for index in list(self._busy):
                 inbox = self._inbox[index]
                 while inbox and inbox[0][0] <= now:
-                    particle.receive(inbox.popleft()[1])
+                    self.firmware[index].receive(inbox.popleft()[1])
+                    speakers.add(index)  # a command may be answered at once
+                if not inbox:
+                    self._busy.discard(index)
+            for index in sorted(speakers):
                 if now >= self._quiet_until[index]:
-                    frame = particle.transmit_frame()
-                    if frame:
-                        ends = self._lines[index].write(frame, now)
-                        out.extend(
-                            SerialByte(index, c, v) for c, v in zip(ends, frame, strict=True)
-                        )
-                        self._quiet_until[index] = ends[-1] + self._gap_cycles
+                    self._send(index, now, out)
             self._next_tick = now + TICK_CYCLES
         return out
 
+    def _send(self, index: int, now: int, out: list[SerialByte]) -> None:
+        frame = self.firmware[index].transmit_frame()
+        if frame:
+            ends = self._lines[index].write(frame, now)
+            out.extend(SerialByte(index, c, v) for c, v in zip(ends, frame, strict=True))
+            self._quiet_until[index] = ends[-1] + self._gap_cycles
+
     def receive(self, copy: Reception) -> None:
         inbox = self._inbox[copy.receiver]
+        self._busy.add(copy.receiver)
         data = copy.data
-        # Bytes reach the logic at the first tick after each is in; grouped by that tick.
-        first_tick = -1
-        start = 0
-        for i in range(len(data)):
-            tick = -(-copy.byte_end(i) // TICK_CYCLES) * TICK_CYCLES
-            if tick != first_tick:
-                if i > start:
-                    inbox.append((first_tick, data[start:i]))
-                first_tick, start = tick, i
-        inbox.append((first_tick, data[start:]))
+        # Bytes reach the logic at the first tick after each is in, grouped by that tick. Byte i
+        # is in at ceil((line_start + (i + 1) C) / baud) with C = 10 CPU_HZ (sim.clock), so the
+        # bytes in by cycle b are the first floor((b baud - line_start) / C).
+        start_scaled, baud = copy.line_start, copy.baud
+        char_scaled = BITS_PER_CHAR * CPU_HZ
+        first_end = (start_scaled + char_scaled + baud - 1) // baud
+        tick = -(-first_end // TICK_CYCLES) * TICK_CYCLES
+        taken = 0
+        while taken < len(data):
+            count = min(len(data), (tick * baud - start_scaled) // char_scaled)
+            if count > taken:
+                inbox.append((tick, data[taken:count]))
+                taken = count
+            tick += TICK_CYCLES
 
     def set_light(self, index: int, readings: Sequence[int]) -> None:
         self.firmware[index].set_adc([int(v) for v in readings])
 
     def radii_m(self) -> FloatArray:
+        if self._batch is not None:
+            micrometres = np.frombuffer(memoryview(self._batch.radius_um), dtype=np.uint32)
+            return np.asarray(micrometres * 1e-6, dtype=np.float64)
         radii = self._radii
         for index, particle in enumerate(self.firmware):
             radii[index] = particle.radius_um * 1e-6

@@ -5,7 +5,7 @@ with the paper's rows beside it, and a picture of every run.
     python tools/closed_loop.py                       # 10 virtual particles, A-D, 5 seeds, 30 min
     python tools/closed_loop.py --level emulated --particles 5 --scenario line --minutes 10 \\
         --seeds 1
-    python tools/closed_loop.py --jobs 2 --out results/closed-loop
+    python tools/closed_loop.py --jobs 2 --variant D:COUNT_TOLERANCE=40,UPDATE_INTERVAL_S=360
 
 Virtual particles run the firmware logic, emulated ones the flashed image in simavr; both in the
 2-D world, a lamp 35 cm tall (its bulb 28 cm above the photocells, SI S4A), a blob (SI Algorithm
@@ -48,13 +48,15 @@ def trials(args: argparse.Namespace) -> list[PhototaxisTrial]:
         PhototaxisTrial(method=m, cycle_steps=args.cycle_steps, duration_s=duration)
         for m in args.methods.split(",")
     ]
-    if args.d_tolerance:
+    for variant in args.variant:
+        method, _, settings = variant.partition(":")
+        params = {}
+        for setting in filter(None, settings.split(",")):
+            name, _, value = setting.partition("=")
+            params[Param[name.strip().upper()]] = int(value)
         found.append(
             PhototaxisTrial(
-                method="D",
-                cycle_steps=args.cycle_steps,
-                duration_s=duration,
-                params={Param.COUNT_TOLERANCE: args.d_tolerance},
+                method=method, cycle_steps=args.cycle_steps, duration_s=duration, params=params
             )
         )
     return found
@@ -81,7 +83,13 @@ def main() -> None:
     parser.add_argument("--start", type=float, default=1.5, help="m from the lamp's foot")
     parser.add_argument("--lamp-height", type=float, default=0.28, help="m above the photocells")
     parser.add_argument("--methods", default="A,B,C,D")
-    parser.add_argument("--d-tolerance", type=int, default=0, help="also D with this tolerance")
+    parser.add_argument(
+        "--variant",
+        action="append",
+        default=[],
+        metavar="M:PARAM=V,...",
+        help="also run method M with these parameters set first, e.g. D:COUNT_TOLERANCE=40",
+    )
     parser.add_argument("--cycle-steps", type=int, default=150)
     parser.add_argument("--minutes", type=float, default=30.0)
     parser.add_argument("--seeds", type=int, default=5)
@@ -92,7 +100,8 @@ def main() -> None:
     jobs = []
     for trial in trials(args):
         for seed in range(1, args.seeds + 1):
-            name = f"{trial.label.split()[0]}{'-tol' if trial.params else ''}-seed{seed}.jsonl"
+            tuned = "-" + "-".join(f"{p.name.lower()}{v}" for p, v in trial.params.items())
+            name = f"{trial.label.split()[0]}{tuned if trial.params else ''}-seed{seed}.jsonl"
             jobs.append((url_of(args, seed), trial, args.out, name))
     began = time.monotonic()
     results: list[PhototaxisResult] = []
@@ -199,7 +208,8 @@ def picture(results: list[PhototaxisResult], output: Path) -> None:
     speeds.scatter(np.full(len(PAPER), paper_x), [a for _, a, _, _ in PAPER], color="black",
                    marker="D", zorder=3)  # fmt: skip
     speeds.axhspan(1.79, 3.13, color="0.85", zorder=0, label="Table S2's range")
-    speeds.set_xticks(range(len(labels) + 1), [*labels, "paper (Table S2)"], fontsize=8)
+    ticks = [label.replace(" (", "\n(").replace(", ", ",\n") for label in labels]
+    speeds.set_xticks(range(len(labels) + 1), [*ticks, "paper\n(Table S2)"], fontsize=7)
     speeds.set_ylabel("average speed toward the lamp (% min. diameter / cycle)")
     speeds.set_title("speed per run (n.s.: not significant at p < 0.01)")
     speeds.grid(True, axis="y", alpha=0.3)

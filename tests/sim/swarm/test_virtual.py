@@ -15,6 +15,7 @@ from particlebot.sim.scenarios import presets
 from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.tracker import SwarmTracker
 from tests.host.fakes import wait_until
+from tests.sim.particles.native.delegate import Delegate
 
 
 def test_method_d_gives_every_particle_its_rank_by_distance_and_stop_is_confirmed() -> None:
@@ -85,37 +86,17 @@ def test_the_swarm_clock_can_run_faster_than_real_time() -> None:
     assert swarm.achieved_speed > 1.0
 
 
-class FailingParticle:
+class FailingParticle(Delegate):
     """A particle whose logic raises once simulated time passes fail_at_ms."""
 
     def __init__(self, inner: FirmwareParticle, fail_at_ms: int) -> None:
-        self.inner = inner
+        super().__init__(inner)
         self.fail_at_ms = fail_at_ms
-
-    def set_adc(self, values: list[int]) -> None:
-        self.inner.set_adc(values)
-
-    def receive(self, data: bytes) -> None:
-        self.inner.receive(data)
 
     def tick(self, now_ms: int) -> None:
         if now_ms >= self.fail_at_ms:
             raise RuntimeError("particle logic crashed")
-        self.inner.tick(now_ms)
-
-    def transmit_frame(self) -> bytes:
-        return self.inner.transmit_frame()
-
-    @property
-    def id(self) -> int:
-        return self.inner.id
-
-    @property
-    def radius_um(self) -> int:
-        return self.inner.radius_um
-
-    def close(self) -> None:
-        self.inner.close()
+        super().tick(now_ms)
 
 
 def test_a_crashed_swarm_says_so_instead_of_looking_alive() -> None:

@@ -13,40 +13,24 @@ from particlebot.sim.air.medium import AirPacket, Reception, char_cycles
 from particlebot.sim.clock import CYCLES_PER_MS
 from particlebot.sim.particles.native import NativeParticles, native_factory
 from particlebot.sim.particles.native.particles import TICK_CYCLES, FirmwareParticle
+from tests.sim.particles.native.delegate import Delegate
 
 
-class Recording:
-    """A particle that notes when each byte reached it (and otherwise is the firmware logic)."""
+class Recording(Delegate):
+    """The firmware logic, noting when each byte reached it."""
 
     def __init__(self, inner: FirmwareParticle) -> None:
-        self.inner = inner
+        super().__init__(inner)
         self.now_ms = 0
         self.got: list[tuple[int, int]] = []  # (ms, byte)
 
-    def set_adc(self, values: list[int]) -> None:
-        self.inner.set_adc(values)
-
     def receive(self, data: bytes) -> None:
         self.got += [(self.now_ms, b) for b in data]
-        self.inner.receive(data)
+        super().receive(data)
 
     def tick(self, now_ms: int) -> None:
         self.now_ms = now_ms
-        self.inner.tick(now_ms)
-
-    def transmit_frame(self) -> bytes:
-        return self.inner.transmit_frame()
-
-    @property
-    def id(self) -> int:
-        return self.inner.id
-
-    @property
-    def radius_um(self) -> int:
-        return self.inner.radius_um
-
-    def close(self) -> None:
-        self.inner.close()
+        super().tick(now_ms)
 
 
 @pytest.mark.parametrize("line_start", [0, 123_456 * 9600, 7_777_777 * 9600 + 5000])

@@ -244,18 +244,18 @@ def run(args: argparse.Namespace) -> int:
             return fail(f"the run cannot be measured: {exc}")
         for line in result.lines():
             print(line)
-        if not ui and not args.no_log:
-            # Drawn once the log is closed, so it holds the whole session; a failed picture is
-            # reported but does not turn a good demo into a failed one.
-            write_plot(log)
-            if not args.no_animation:
-                _write_animation(log)
         significant = result.p_value < 0.01 and result.toward_lamp_m > 0
         print(
             "the swarm moved toward the lamp, significantly (p < 0.01), as in Table S2"
             if significant
             else "not a significant move toward the lamp (p >= 0.01): run it longer (--run-s)"
         )
+        if not ui and not args.no_log:
+            # Drawn once the log is closed, so it holds the whole session; a failed picture is
+            # reported but does not turn a good demo into a failed one.
+            write_plot(log)
+            if not args.no_animation:
+                _write_animation(log)
         if args.json:
             print(result.as_json())
         return code

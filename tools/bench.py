@@ -19,6 +19,7 @@ BENCHMARKS: list[tuple[str, list[str]]] = [
     ("Vectorised firmware controller", [sys.executable, "tools/bench_firmware_controller.py"]),
     ("STOP right after a base-station restart", [sys.executable, "tools/bench_stop_restart.py"]),
     ("Swarm placement (SI Algorithm 5)", [sys.executable, "tools/bench_placement.py"]),
+    ("The world stepping a packed blob", [sys.executable, "tools/bench_world.py"]),
     ("Firmware in the loop (simavr)", [sys.executable, "tools/bench_sim.py"]),
     ("Video tracker on synthetic runs", [sys.executable, "tools/bench_tracker.py"]),
 ]

@@ -73,7 +73,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", metavar="RUN_FOLDER", help="default runs/NAME-DATE-TIME")
     parser.add_argument("--video", action="store_true", help="also film the run (MP4 or GIF)")
-    parser.add_argument("--resume", metavar="RUN_FOLDER", help="continue a stopped run")
+    parser.add_argument(
+        "--resume",
+        metavar="RUN_FOLDER",
+        help="continue a stopped run (with --duration: to a new end)",
+    )
     parser.add_argument(
         "--json", action="store_true", help="end with one JSON line of the run's figures"
     )
@@ -181,11 +185,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         if args.resume is not None:
             if args.scenario is not None or _changes(args):
-                raise ScenarioError("--resume continues a run as it was: give no scenario or flags")
+                raise ScenarioError(
+                    "--resume continues a run as it was: give no scenario, and of the flags "
+                    "only --duration (a new end), --video or --json"
+                )
             folder = Path(args.resume)
             check_run_folder(folder)
             print(f"resuming {folder} (compiling or loading the kernels)", file=sys.stderr)
-            session = Run.resume(folder, record_video=args.video)
+            session = Run.resume(folder, record_video=args.video, duration_s=args.duration)
         else:
             from particlebot.sim.scenarios.build import build_world
 
@@ -210,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
     except VideoError as exc:
         return fail(f"simulate: {exc} (the run itself is complete in its folder)")
     except KeyboardInterrupt:
-        print("particlebot: simulate: stopped before the run began; nothing was written")
+        print("particlebot: simulate: stopped before the run began", file=sys.stderr)
         return 130
     _report(summary, args.json)
     return 0 if summary.finished else 130
@@ -218,8 +225,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _changes(args: argparse.Namespace) -> bool:
     flags = (
-        args.particles, args.duration, args.seed, args.controller, args.lamp, args.dump_interval,
-        args.output,
+        args.particles, args.seed, args.controller, args.lamp, args.dump_interval, args.output,
     )  # fmt: skip
     return any(flag is not None for flag in flags) or args.per_particle
 

@@ -14,6 +14,7 @@ import pytest
 from particlebot.analysis import simcsv, sources
 from particlebot.sim.runs.csvlog import keep_rows_through
 from particlebot.sim.runs.run import Run, RunError, latest_snapshot
+from particlebot.sim.runs.video import encode
 from particlebot.sim.scenarios.build import build_world
 from particlebot.sim.scenarios.scenario import (
     LampSpec,
@@ -203,3 +204,5 @@ def test_a_video_is_made_of_the_runs_frames(tmp_path: Path) -> None:
         count += 1
     capture.release()
     assert count == 5
+    gif = encode(folder / "frames", folder / "run.gif")
+    assert gif.read_bytes()[:6] == b"GIF89a"

@@ -4,7 +4,6 @@ in one line with nothing written, and Ctrl-C followed by --resume."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -91,10 +90,14 @@ def test_flags_change_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixt
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_nothing_written(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    message: str,
 ) -> None:
     folder = tmp_path / "run"
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)  # where a default runs/ folder would appear
 
     with pytest.raises(SystemExit) as stopped:
         code = main(["simulate", *argv, "-o", str(folder)] if "--resume" not in argv else
@@ -136,11 +139,9 @@ def run_cli(*argv: str, cwd: Path) -> subprocess.Popen[str]:
 
 
 def test_ctrl_c_keeps_a_snapshot_and_resume_finishes_the_same_run(tmp_path: Path) -> None:
-    quick = ["--particles", "20", "--duration", "400", "--dump-interval", "20", "--seed", "4"]
-    straight = run_cli(*quick, "-o", "straight", cwd=tmp_path)
-    assert straight.wait(timeout=240) == 0, straight.communicate()[1]
-
-    stopped = run_cli(*quick, "-o", "stopped", "--json", cwd=tmp_path)
+    quick = ["--particles", "20", "--dump-interval", "20", "--seed", "4"]
+    # Far too long to finish before the signal, whatever the machine's load.
+    stopped = run_cli(*quick, "--duration", "100000", "-o", "stopped", "--json", cwd=tmp_path)
     assert stopped.stderr is not None
     # The progress bar's first line comes after the first chunk of steps: the run is running.
     for line in stopped.stderr:
@@ -153,13 +154,49 @@ def test_ctrl_c_keeps_a_snapshot_and_resume_finishes_the_same_run(tmp_path: Path
     summary = last_json(out)
     assert summary["finished"] is False
     assert "continue with: particlebot simulate --resume stopped" in out
-    assert Path(str(summary["snapshot"])).exists() or (tmp_path / str(summary["snapshot"])).exists()
+    assert (tmp_path / str(summary["snapshot"])).exists()
+    stop_s = summary["t_s"]
+    assert isinstance(stop_s, float) and 0 < stop_s < 100000
 
-    resumed = run_cli("--resume", "stopped", "--json", cwd=tmp_path)
+    # Resumed to an end two rows past the stop, it equals a run that went there at once.
+    end = str((int(stop_s // 20) + 2) * 20)
+    resumed = run_cli("--resume", "stopped", "--duration", end, "--json", cwd=tmp_path)
     out, err = resumed.communicate(timeout=240)
-
     assert resumed.returncode == 0, err
-    assert last_json(out)["steps"] == 40_000
+    assert last_json(out)["steps"] == int(end) * 100
+    straight = run_cli(*quick, "--duration", end, "-o", "straight", cwd=tmp_path)
+    assert straight.wait(timeout=240) == 0, straight.communicate()[1]
+
     csv = (tmp_path / "stopped" / "run.csv").read_text()
     assert csv == (tmp_path / "straight" / "run.csv").read_text()
-    assert len(csv.splitlines()) == 2 + 21
+    assert len(csv.splitlines()) == 2 + int(end) // 20 + 1
+    assert f"duration_s = {float(end)!r}" in (tmp_path / "stopped" / "scenario.toml").read_text()
+
+
+def test_resume_with_an_end_before_the_snapshot_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = tmp_path / "run"
+    assert main(["simulate", "--particles", "5", "--duration", "2", "-o", str(folder)]) == 0
+    capsys.readouterr()
+
+    code = main(["simulate", "--resume", str(folder), "--duration", "1"])
+
+    assert code == 2
+    assert "is at 2 s already" in capsys.readouterr().err
+
+
+def test_render_films_a_run_folder_with_per_particle_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = tmp_path / "run"
+    argv = ["simulate", "--particles", "6", "--duration", "4", "--dump-interval", "1"]
+    assert main([*argv, "--per-particle", "-o", str(folder)]) == 0
+    video = tmp_path / "run.mp4"
+
+    code = main(["render", str(folder), "-o", str(video), "--size", "320x180", "--fps", "1"])
+
+    assert code == 0, capsys.readouterr().err
+    assert video.stat().st_size > 0
+    truth = video.with_suffix(".truth.csv").read_text().splitlines()
+    assert len(truth) >= 1 + 4  # a header, then a frame per second of the run

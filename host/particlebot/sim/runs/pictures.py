@@ -39,6 +39,10 @@ LOOSE = "#f4a582"
 OBJECT = "#8b5a2b"
 OBSTACLE = "#3a3a3a"
 LAMP = "#ffd21f"
+LAMP_IN_VIEW = 1.5
+"""A picture takes in the lamp when it lies within this many swarm spans of the swarm."""
+SMALLEST_STAMP_PX = 2.0
+"""A picture stamps particles of this radius in pixels or more; smaller ones become coverage."""
 DISC_LIMIT = 20_000
 """Up to this many particles each is drawn as a disc of its radius; beyond, every particle
 colours the pixel it lies in (a disc would be smaller than a pixel anyway)."""
@@ -97,20 +101,30 @@ class View:
 
     @classmethod
     def around(cls, frame: Frame, lamp: tuple[float, float], arena: Arena, title: str) -> View:
-        """The swarm, its objects and the lamp, with a margin, at least 2 m across."""
-        xs: list[FloatArray] = [frame.x - frame.radius, frame.x + frame.radius, np.array([lamp[0]])]
-        ys: list[FloatArray] = [frame.y - frame.radius, frame.y + frame.radius, np.array([lamp[1]])]
+        """The swarm and its objects with a margin, at least 2 m across, and the lamp when it
+        is near enough not to shrink the swarm to a speck (else an arrow points to it)."""
+        xs: list[FloatArray] = [frame.x - frame.radius, frame.x + frame.radius]
+        ys: list[FloatArray] = [frame.y - frame.radius, frame.y + frame.radius]
         if len(frame.objects):
             o = frame.objects
             xs += [o[:, 0] - o[:, 4], o[:, 0] + o[:, 4]]
             ys += [o[:, 1] - o[:, 4], o[:, 1] + o[:, 4]]
         x0, x1 = float(np.min(np.concatenate(xs))), float(np.max(np.concatenate(xs)))
         y0, y1 = float(np.min(np.concatenate(ys))), float(np.max(np.concatenate(ys)))
+        span = max(x1 - x0, y1 - y0, 1.0)
+        outside = max(x0 - lamp[0], lamp[0] - x1, y0 - lamp[1], lamp[1] - y1, 0.0)
+        if outside <= LAMP_IN_VIEW * span:
+            x0, x1 = min(x0, lamp[0]), max(x1, lamp[0])
+            y0, y1 = min(y0, lamp[1]), max(y1, lamp[1])
         margin = max(0.08 * max(x1 - x0, y1 - y0), 0.3)
         cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
         half_x = max((x1 - x0) / 2 + margin, 1.0)
         half_y = max((y1 - y0) / 2 + margin, 1.0)
         return cls((cx - half_x, cx + half_x, cy - half_y, cy + half_y), lamp, arena, title)
+
+    def shows(self, x: float, y: float) -> bool:
+        x0, x1, y0, y1 = self.bounds
+        return x0 <= x <= x1 and y0 <= y <= y1
 
     def to_json(self) -> dict[str, Any]:
         return {"bounds": list(self.bounds), "lamp": list(self.lamp), "title": self.title}
@@ -143,18 +157,7 @@ def draw_swarm(frame: Frame, view: View, size_in: tuple[float, float] | None = N
     ax.grid(True, color="#e2ded5", linewidth=0.6, zorder=0)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    for rect in view.arena.rects:
-        ax.add_patch(
-            Rectangle(
-                (rect.x_min, rect.y_min),
-                rect.x_max - rect.x_min,
-                rect.y_max - rect.y_min,
-                facecolor=OBSTACLE,
-                zorder=2,
-            )
-        )
-    for circle in view.arena.circles:
-        ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE, zorder=2))
+    _draw_obstacles(ax, view.arena)
     colours = frame.colours()
     if len(frame.x) <= DISC_LIMIT:
         ax.add_collection(
@@ -182,10 +185,15 @@ def draw_swarm(frame: Frame, view: View, size_in: tuple[float, float] | None = N
     for o in frame.objects:
         ax.add_patch(CirclePatch((o[0], o[1]), o[4], facecolor=OBJECT, edgecolor="black", zorder=4))
     lx, ly = view.lamp
-    ax.plot([lx], [ly], marker="*", markersize=22, color=LAMP, markeredgecolor="black", zorder=5)
-    ax.annotate(
-        "lamp", (lx, ly), xytext=(0, -20), textcoords="offset points", ha="center", zorder=5
-    )
+    if view.shows(lx, ly):
+        ax.plot(
+            [lx], [ly], marker="*", markersize=22, color=LAMP, markeredgecolor="black", zorder=5
+        )
+        ax.annotate(
+            "lamp", (lx, ly), xytext=(0, -20), textcoords="offset points", ha="center", zorder=5
+        )
+    else:
+        _arrow_to_lamp(ax, view)
     handles: list[Artist] = [
         Patch(facecolor=PHASE_MAP(0.1), edgecolor="#404040", label="cycling (colour: phase)"),
         Patch(facecolor=RESTING, edgecolor="#404040", label="resting"),
@@ -213,18 +221,108 @@ def draw_swarm(frame: Frame, view: View, size_in: tuple[float, float] | None = N
     return figure
 
 
+def _draw_obstacles(ax: Any, arena: Arena) -> None:
+    for rect in arena.rects:
+        width, height = rect.x_max - rect.x_min, rect.y_max - rect.y_min
+        ax.add_patch(
+            Rectangle((rect.x_min, rect.y_min), width, height, facecolor=OBSTACLE, zorder=2)
+        )
+    for circle in arena.circles:
+        ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE, zorder=2))
+
+
+def _arrow_to_lamp(ax: Any, view: View) -> None:
+    """An arrow at the picture's edge toward a lamp outside it, with its distance."""
+    x0, x1, y0, y1 = view.bounds
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    lx, ly = view.lamp
+    distance = math.hypot(lx - cx, ly - cy)
+    ux, uy = (lx - cx) / distance, (ly - cy) / distance
+    # Where the ray from the centre leaves the picture.
+    reach = min(
+        (x1 - x0) / 2 / abs(ux) if ux else math.inf, (y1 - y0) / 2 / abs(uy) if uy else math.inf
+    )
+    ax.annotate(
+        f"lamp, {distance:.1f} m",
+        xy=(cx + 0.97 * reach * ux, cy + 0.97 * reach * uy),
+        xytext=(cx + 0.8 * reach * ux, cy + 0.8 * reach * uy),
+        arrowprops={"arrowstyle": "-|>", "color": "#b8860b", "lw": 2},
+        color="#8a6500",
+        ha="center",
+        va="center",
+        bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "#b8860b", "alpha": 0.9},
+        zorder=6,
+    )
+
+
 def _raster(
     frame: Frame, view: View, colours: npt.NDArray[np.float64], figure: Figure
 ) -> npt.NDArray[np.float64]:
-    """An RGBA image with every particle colouring the pixel its centre falls in."""
+    """An RGBA image about as fine as the picture, each particle a disc of pixels of its radius
+    (at least its centre's pixel)."""
     width_px = int(figure.get_figwidth() * figure.dpi)
     x0, x1, y0, y1 = view.bounds
-    height_px = max(1, round(width_px * (y1 - y0) / (x1 - x0)))
+    metre_px = width_px / (x1 - x0)
+    height_px = max(1, round((y1 - y0) * metre_px))
     image = np.zeros((height_px, width_px, 4))
-    ix = np.floor((frame.x - x0) / (x1 - x0) * width_px).astype(np.int64)
-    iy = np.floor((frame.y - y0) / (y1 - y0) * height_px).astype(np.int64)
-    inside = (ix >= 0) & (ix < width_px) & (iy >= 0) & (iy < height_px)
-    image[iy[inside], ix[inside]] = colours[inside]
+    ix = np.floor((frame.x - x0) * metre_px).astype(np.int64)
+    iy = np.floor((frame.y - y0) * metre_px).astype(np.int64)
+    radius_px = frame.radius * metre_px
+    reach = max(0, math.floor(float(radius_px.max())))
+    if float(np.median(radius_px)) < SMALLEST_STAMP_PX:
+        # A few pixels or less: cells about one (largest) diameter wide, each coloured by its
+        # particles and as opaque as they cover it (stamps that small would look sparse).
+        cells_x = max(1, round((x1 - x0) / (2 * float(frame.radius.max()))))
+        cell_m = (x1 - x0) / cells_x
+        cells_y = max(1, round((y1 - y0) / cell_m))
+        coarse = np.zeros((cells_y, cells_x, 4))
+        fx, fy = (frame.x - x0) / cell_m, (frame.y - y0) / cell_m
+        return _coverage(fx, fy, frame.radius / cell_m, colours, coarse)
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            px, py = ix + dx, iy + dy
+            keep = (px >= 0) & (px < width_px) & (py >= 0) & (py < height_px)
+            if dx or dy:
+                keep &= dx * dx + dy * dy <= radius_px**2
+            image[py[keep], px[keep]] = colours[keep]
+    return image
+
+
+def _coverage(
+    fx: FloatArray,
+    fy: FloatArray,
+    radius: FloatArray,
+    colours: npt.NDArray[np.float64],
+    image: npt.NDArray[np.float64],
+) -> npt.NDArray[np.float64]:
+    """Each cell of `image` takes the area-weighted mean colour of the particles over it and is
+    as opaque as they cover it, so a swarm reads as its density. fx, fy, radius: particles in
+    cells; each particle's area is shared among the four cells nearest its centre (bilinear),
+    which keeps a packed swarm free of the holes that whole particles per cell would leave."""
+    height, width = image.shape[:2]
+    area = np.pi * radius**2
+    gx, gy = fx - 0.5, fy - 0.5
+    ix, iy = np.floor(gx).astype(np.int64), np.floor(gy).astype(np.int64)
+    wx, wy = gx - ix, gy - iy
+    covered = np.zeros(height * width)
+    rgb = np.zeros((height * width, 3))
+    for dx, dy, weight in (
+        (0, 0, (1 - wx) * (1 - wy)), (1, 0, wx * (1 - wy)),
+        (0, 1, (1 - wx) * wy), (1, 1, wx * wy),
+    ):  # fmt: skip
+        px, py = ix + dx, iy + dy
+        keep = (px >= 0) & (px < width) & (py >= 0) & (py < height)
+        cell = py[keep] * width + px[keep]
+        share = area[keep] * weight[keep]
+        covered += np.bincount(cell, weights=share, minlength=height * width)
+        for c in range(3):
+            rgb[:, c] += np.bincount(
+                cell, weights=share * colours[keep, c], minlength=height * width
+            )
+    painted = covered > 0
+    flat = image.reshape(-1, 4)
+    flat[painted, :3] = rgb[painted] / covered[painted, None]
+    flat[painted, 3] = np.minimum(covered[painted], 1.0)
     return image
 
 
@@ -242,17 +340,7 @@ def save_track_plot(path: Path, run: PublishedRun, view: View) -> Path:
     path_ax, distance_ax = figure.subplots(1, 2, width_ratios=(1.0, 1.2))
     cx, cy = run.centroid_m[:, 0], run.centroid_m[:, 1]
     lx, ly = view.lamp
-    for rect in view.arena.rects:
-        path_ax.add_patch(
-            Rectangle(
-                (rect.x_min, rect.y_min),
-                rect.x_max - rect.x_min,
-                rect.y_max - rect.y_min,
-                facecolor=OBSTACLE,
-            )
-        )
-    for circle in view.arena.circles:
-        path_ax.add_patch(CirclePatch((circle.x, circle.y), circle.radius, facecolor=OBSTACLE))
+    _draw_obstacles(path_ax, view.arena)
     path_ax.plot(cx, cy, color="#1f77b4", linewidth=1.5, label="centroid")
     path_ax.plot(cx[:1], cy[:1], "o", color="#2ca02c", label="start")
     path_ax.plot(cx[-1:], cy[-1:], "s", color="#d62728", label="end")

@@ -20,7 +20,7 @@ import os
 import shutil
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -122,6 +122,7 @@ class Run:
         view: View,
         start: tuple[tuple[float, float], float],
         record_video: bool,
+        frame_every: int,
     ) -> None:
         self.folder = folder
         self.scenario = scenario
@@ -131,7 +132,7 @@ class Run:
         self.start_centroid, self.start_distance = start
         self.record_video = record_video
         self.total_steps = scenario.steps
-        self._frame_every = video.frame_every(self.total_steps, scenario.output.video_frames)
+        self._frame_every = frame_every
         self._snapshot_step = -1
         world.add_observer(self._dump, scenario.dump_every)
         world.add_observer(self._periodic_snapshot, scenario.snapshot_every)
@@ -149,17 +150,23 @@ class Run:
         scenario, world = built.scenario, built.world
         folder.mkdir(parents=True, exist_ok=True)
         (folder / SNAPSHOTS).mkdir()
-        positions = None
         if scenario.swarm.placement is PlacementKind.FILE and scenario.swarm.file is not None:
-            positions = "positions" + scenario.swarm.file.suffix
-            shutil.copyfile(scenario.swarm.file, folder / positions)
-        (folder / SCENARIO_FILE).write_text(to_toml(scenario, positions), encoding="utf-8")
-        (folder / PUBLISHED_FILE).write_text(
-            to_published_cfg(scenario, built.particles), encoding="utf-8"
-        )
+            shutil.copyfile(
+                scenario.swarm.file, folder / ("positions" + scenario.swarm.file.suffix)
+            )
+        _write_scenario(folder, scenario, built.particles)
         start = (world.centroid(), world.light_distance())
-        _write_state(folder, {"video": record_video, "centroid_start": start[0],
-                              "distance_to_light_start": start[1]})  # fmt: skip
+        frame_every = video.frame_every(scenario.steps, scenario.output.video_frames)
+        _write_state(
+            folder,
+            {
+                "video": record_video,
+                "centroid_start": start[0],
+                "distance_to_light_start": start[1],
+                "particles": built.particles,
+                "frame_every": frame_every,
+            },
+        )
         frame = Frame.of(world)
         view = View.around(frame, (world.lamp.x, world.lamp.y), world.arena, _title(scenario))
         (folder / "view.json").write_text(json.dumps(view.to_json()) + "\n")
@@ -167,7 +174,7 @@ class Run:
         csv = CsvLog.create(
             folder / scenario.output.csv_name, scenario.seed, bodies, scenario.output.per_particle
         )
-        run = cls(folder, scenario, world, csv, view, start, record_video)
+        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
         run._dump(world)
         run._snapshot()
         save_swarm_picture(folder / START_PICTURE, frame, view)
@@ -176,9 +183,12 @@ class Run:
         return run
 
     @classmethod
-    def resume(cls, folder: Path, record_video: bool = False) -> Run:
+    def resume(
+        cls, folder: Path, record_video: bool = False, duration_s: float | None = None
+    ) -> Run:
         """Continues a run from its latest snapshot; the CSV loses the rows written after it
-        (the resumed run writes them again, the same)."""
+        (the resumed run writes them again, the same). duration_s moves the run's end (later
+        or earlier, not before the snapshot), and the folder's scenario says so."""
         snapshot = check_run_folder(folder)
         scenario = read_scenario(folder / SCENARIO_FILE)
         try:
@@ -193,15 +203,24 @@ class Run:
                 (float(centroid[0]), float(centroid[1])),
                 float(state["distance_to_light_start"]),
             )
+            frame_every = int(state["frame_every"])
+            particles = int(state["particles"])
         except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
             raise RunError(f"{folder}: damaged run files ({exc})") from None
+        if duration_s is not None:
+            if round(duration_s / world.params.dt) < world.steps:
+                raise RunError(
+                    f"{folder} is at {world.t:g} s already: give a --duration beyond that"
+                )
+            scenario = replace(scenario, duration_s=duration_s)
+            _write_scenario(folder, scenario, particles)
         view = View.from_json(view_data, world.arena)
         csv_path = folder / scenario.output.csv_name
         if not csv_path.is_file():
             raise RunError(f"{folder}: its CSV {csv_path.name} is missing")
         csv = CsvLog.resume(csv_path, world.t, scenario.output.per_particle)
         record_video = record_video or bool(state.get("video"))
-        run = cls(folder, scenario, world, csv, view, start, record_video)
+        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
         run._snapshot_step = world.steps
         if record_video and not state.get("video"):
             _write_state(folder, {**state, "video": True})
@@ -327,6 +346,16 @@ class Run:
         )
         (folder / SUMMARY_FILE).write_text(json.dumps(summary.to_json(), indent=1) + "\n")
         return summary
+
+
+def _write_scenario(folder: Path, scenario: Scenario, particles: int) -> None:
+    """scenario.toml and published.cfg: the scenario as run (its positions file, if any, is the
+    folder's own copy)."""
+    positions = None
+    if scenario.swarm.placement is PlacementKind.FILE and scenario.swarm.file is not None:
+        positions = "positions" + scenario.swarm.file.suffix
+    (folder / SCENARIO_FILE).write_text(to_toml(scenario, positions), encoding="utf-8")
+    (folder / PUBLISHED_FILE).write_text(to_published_cfg(scenario, particles), encoding="utf-8")
 
 
 def _write_state(folder: Path, state: dict[str, Any]) -> None:

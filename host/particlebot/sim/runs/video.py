@@ -45,13 +45,17 @@ def encode(folder: Path, output: Path, fps: int = FPS) -> Path:
     frames = sorted(p for p in folder.glob("[0-9]*.png") if not p.name.endswith(".part.png"))
     if not frames:
         raise VideoError(f"no frames in {folder}")
-    # Frames are numbered from 0 without gaps (one every so many steps, resumed runs included).
+    # Frames are numbered without gaps (one every so many steps, resumed runs included), from 0
+    # or from where --video was first asked for.
+    first = min(int(p.stem) for p in frames)
     command = [
         imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-framerate", str(fps),
-        "-start_number", "0", "-i", str(folder / "%06d.png"),
+        "-start_number", str(first), "-i", str(folder / "%06d.png"),
     ]  # fmt: skip
     if output.suffix.lower() == ".gif":
-        command += ["-vf", "scale=640:-1:flags=lanczos"]
+        # One palette made for the whole film: smaller and cleaner than the default one.
+        palette = "scale=640:-1:flags=lanczos,split[a][b];[a]palettegen[p];[b][p]paletteuse"
+        command += ["-vf", palette]
     else:
         command += ["-vf", "format=yuv420p", "-c:v", "libx264", "-crf", "23"]
     temporary = output.with_name(output.stem + ".part" + output.suffix)

@@ -201,7 +201,8 @@ class Fields:
                 if member.value == raw:
                     return member
         names = ", ".join(m.name for m in members)
-        raise self.fail(where, f"must be one of {names}, not {_show(raw)}")
+        letters_too = f" (or A-{chr(ord('A') + len(members) - 1)})" if len(members) <= 26 else ""
+        raise self.fail(where, f"must be one of {names}{letters_too}, not {_show(raw)}")
 
 
 def _join(prefix: str, key: str) -> str:

@@ -170,7 +170,11 @@ class _Reader:
             output=self.output(f.table(data, "output")),
             source=self.source,
         )
-        if scenario.dead.resolve(scenario.swarm.particles) > scenario.swarm.particles:
+        placed_here = scenario.swarm.placement is not PlacementKind.FILE  # else: when built
+        if (
+            placed_here
+            and scenario.dead.resolve(scenario.swarm.particles) > scenario.swarm.particles
+        ):
             key = "dead.fraction" if scenario.dead.fraction is not None else "dead.count"
             raise f.fail(key, f"more dead particles than the swarm's {scenario.swarm.particles}")
         return scenario

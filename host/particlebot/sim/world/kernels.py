@@ -1,20 +1,25 @@
 """The world's compiled inner loops (numba): servo, motion, contacts, magnets, friction, lists.
 
-Memory layout (structure of arrays, rows of 2-D arrays, particles in *internal* order): the
-particles are kept sorted by neighbour-grid cell so that a particle's neighbours sit close to it
-in memory; `ext[i]` is the caller's index of internal slot i. Passive objects (few, possibly
-huge discs) live in their own arrays and meet every particle directly, outside the lists.
+Memory layout (structure of arrays, rows of 2-D arrays, particles in *internal* order): at every
+list build the particles are put in grid-cell order (row by row), so that a particle's neighbours
+sit close to it in memory; `ext[i]` is the caller's index of internal slot i. Passive objects
+(few, possibly huge discs) live in their own array and meet every particle directly.
 
-    pos   float64 (2, N)  x, y             ref  float64 (2, N)  x, y at the last list build
-    vel   F       (2, N)  vx, vy           vel2 F (2, N)        the next step's (double buffer)
-    body  F       (4, N)  r, contact-force sum, attraction sum (both from the last force pass),
-                          magnet factor (1, or 0 for a detached particle)
-    flags uint8   (5, N)  kind (MEMBER / FREE / DETACHED), acting, joined, alive, held
-    nbr   int32   (N, M)  neighbour lists (full: j in i's list and i in j's), counts in ncount
+    pos     float64 (2, N)  x, y            ref  float64 (2, N)  x, y at the last list build
+    vel     F       (2, N)  vx, vy          vel_old F (2, N)     last step's, for the force pass
+    body    F       (6, N)  r, contact-force sum, attraction sum, magnet factor (1, or 0 once
+                            detached), force x, force y (the last two only inside a step)
+    flags   uint8   (5, N)  kind (MEMBER / FREE / DETACHED), acting, joined, alive, held
+    nbr     int32   (N, M)  half neighbour lists: j > i within the list radius, counts in ncount
 
-F is float64 or float32 (the World's `precision`). Every pass works on a contiguous chunk of
-particles and writes only that chunk (plus one row of a per-chunk reduction), so chunks run in
-parallel without atomics and results do not depend on the number of threads.
+F is float64 or float32 (the World's `precision`; positions are always float64: float32 cannot
+resolve a 10 um step 100 m from the origin).
+
+Each pair is evaluated once (Newton's third law: i gets f, j gets -f), as the published code's
+two one-sided evaluations give bit-identical opposite forces. The work is cut into chunks along
+grid rows: a particle's listed neighbours lie in its own chunk or the next one, so the pair pass
+runs the even chunks in parallel, then the odd ones, without atomics; every other pass writes
+only its own chunk. Results do not depend on the number of threads.
 """
 
 from __future__ import annotations
@@ -56,7 +61,9 @@ B_R = 0
 B_FR = 1
 B_FA = 2
 B_MAG = 3
-BODY_ROWS = 4
+B_FX = 4
+B_FY = 5
+BODY_ROWS = 6
 
 F_KIND = 0
 F_ACTING = 1
@@ -81,30 +88,49 @@ O_STATIC = 7  # force it resists at rest (static_factor x that x mass)
 O_MAG = 8
 OBJECT_COLS = 9
 
-# Per-chunk reduction of what particles do to object m: fx, fy, contact sum, attraction sum.
-ACC_COLS = 4
-
-# Status codes of advance().
-DONE = 0
-LIST_FULL = 1
+# Per-chunk reduction of what particles do to object m: fx, fy.
+ACC_COLS = 2
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+ByteArray = npt.NDArray[np.uint8]
+ListArray = npt.NDArray[np.int32]
+
+# Pair arithmetic may be reassociated and contracted (FMA); nothing in it tests for NaN.
+_FAST = {"contract", "arcp", "nsz", "reassoc"}
 
 
-@numba.njit(cache=True, inline="always")
+# ---- the laws --------------------------------------------------------------------------------
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
-    """Magnet pull (N) across a gap (m) with A = strength x attraction: the clamp below the clamp
-    gap, a linear blend up to the blend gap, A / gap^2 beyond."""
+    """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
+    factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
     clamp_gap = prm[P_CLAMP_GAP]
     blend_gap = prm[P_BLEND_GAP]
-    a = prm[P_ATTRACTION] * strength
+    low = prm[P_CLAMP_FORCE]
     if gap < clamp_gap:
-        return prm[P_CLAMP_FORCE] * strength
+        return low * strength
+    a = prm[P_ATTRACTION]
     if gap < blend_gap:
         top = a / (blend_gap * blend_gap)
-        low = prm[P_CLAMP_FORCE] * strength
-        return low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low)
-    return a / (gap * gap)
+        return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
+    return strength * a / (gap * gap)
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _contact(
+    nx: float, ny: float, overlap: float, spring: float, dvx: float, dvy: float, prm: FloatArray
+) -> tuple[float, float]:
+    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
+    minus first), shear on its tangential part."""
+    vn = dvx * nx + dvy * ny
+    shear = prm[P_SHEAR]
+    damping = prm[P_DAMPING]
+    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
+    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
+    return fx, fy
 
 
 @numba.njit(cache=True, inline="always")
@@ -129,25 +155,110 @@ def _servo(r: float, target: float, fr: float, fa: float, prm: FloatArray) -> fl
     return min(max(r + dr, r_min), r_max)
 
 
+@numba.njit(cache=True, inline="always")
+def _wall_push(
+    nx: float, ny: float, depth: float, vx: float, vy: float, prm: FloatArray
+) -> tuple[float, float]:
+    """Force of one obstacle on a disc it cuts into by `depth` along the outward normal n:
+    2k x depth, with damping and shear against the disc's own velocity."""
+    vn = -vx * nx - vy * ny
+    spring = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
+    fx = spring * depth * nx - prm[P_DAMPING] * vx + prm[P_SHEAR] * (-vx - vn * nx)
+    fy = spring * depth * ny - prm[P_DAMPING] * vy + prm[P_SHEAR] * (-vy - vn * ny)
+    return fx, fy
+
+
+@numba.njit(cache=True, inline="always")
+def _obstacle_force(
+    x: float, y: float, r: float, vx: float, vy: float, rects: FloatArray, circles: FloatArray,
+    prm: FloatArray,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Force of every obstacle a disc overlaps, each on its own (as the published code adds
+    them), and the sum of their magnitudes for the contact-force sum. A rectangle pushes out the
+    shortest way: off the nearest face, or radially off a corner."""
+    fx = 0.0
+    fy = 0.0
+    total = 0.0
+    for o in range(rects.shape[0]):
+        x1 = rects[o, 0]
+        x2 = rects[o, 1]
+        y1 = rects[o, 2]
+        y2 = rects[o, 3]
+        if x <= x1 - r or x >= x2 + r or y <= y1 - r or y >= y2 + r:
+            continue
+        dx = x - min(max(x, x1), x2)
+        dy = y - min(max(y, y1), y2)
+        d2 = dx * dx + dy * dy
+        if d2 > 0.0:
+            if d2 >= r * r:
+                continue
+            d = math.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            depth = r - d
+        else:
+            # Centre inside: out through the nearest face.
+            left = x - x1
+            right = x2 - x
+            below = y - y1
+            above = y2 - y
+            least = min(min(left, right), min(below, above))
+            depth = least + r
+            nx = -1.0 if least == left else (1.0 if least == right else 0.0)
+            ny = 0.0 if nx != 0.0 else (-1.0 if least == below else 1.0)
+        px, py = _wall_push(nx, ny, depth, vx, vy, prm)
+        fx += px
+        fy += py
+        total += math.sqrt(px * px + py * py)
+    for o in range(circles.shape[0]):
+        dx = x - circles[o, 0]
+        dy = y - circles[o, 1]
+        reach = r + circles[o, 2]
+        d2 = dx * dx + dy * dy
+        if d2 < reach * reach and d2 > 0.0:
+            d = math.sqrt(d2)
+            px, py = _wall_push(dx / d, dy / d, reach - d, vx, vy, prm)
+            fx += px
+            fy += py
+            total += math.sqrt(px * px + py * py)
+    return fx, fy, total
+
+
+@numba.njit(cache=True, inline="always")
+def _friction(
+    vx: float, vy: float, fx: float, fy: float, inv_mass: float, slide: float, static: float,
+    prm: FloatArray,
+) -> tuple[float, float]:  # fmt: skip
+    """The new velocity: static friction holds a body at rest below its threshold, then
+    v += F / m dt, then sliding friction takes slide x dt off the speed (to zero at most)."""
+    dt = prm[P_DT]
+    rest = prm[P_REST_SPEED]
+    if vx * vx + vy * vy < rest * rest and fx * fx + fy * fy < static * static:
+        fx = 0.0
+        fy = 0.0
+    vx += fx * inv_mass * dt
+    vy += fy * inv_mass * dt
+    speed = math.sqrt(vx * vx + vy * vy)
+    slow = slide * dt
+    if speed < slow:
+        return 0.0, 0.0
+    scale = 1.0 - slow / speed
+    return vx * scale, vy * scale
+
+
+# ---- the passes of a step (each over particles lo..hi) -----------------------------------------
+
+
 @numba.njit(cache=True)
 def _kinematics(
-    lo: int,
-    hi: int,
-    step: int,
-    targets: FloatArray,
-    ext: npt.NDArray[np.int64],
-    pos: FloatArray,
-    ref: FloatArray,
-    vel: FloatArray,
-    vel_old: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
+    lo: int, hi: int, step: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
-) -> float:
-    """First half of a step for particles lo..hi: joins from the last step take effect, the
-    servo moves the radius, positions advance by the old velocity, walls reflect, and the
-    velocity is kept in vel_old for the force pass (which writes the new one into vel). Returns
-    the largest squared displacement since the last list build."""
+) -> float:  # fmt: skip
+    """First pass: joins from the last step take effect, the servo moves the radius (from the
+    last step's force sums, which are then cleared), positions advance by the old velocity, walls
+    reflect, and the velocity is kept in vel_old for the force passes. Returns the largest
+    squared displacement since the last list build."""
     dt = prm[P_DT]
     wall = prm[P_HALF_WIDTH]
     worst = 0.0
@@ -162,6 +273,10 @@ def _kinematics(
             if not math.isnan(target):  # NaN: the controller lets the servo hold
                 r = _servo(r, target, body[B_FR, i], body[B_FA, i], prm)
                 body[B_R, i] = r
+        body[B_FR, i] = 0.0
+        body[B_FA, i] = 0.0
+        body[B_FX, i] = 0.0
+        body[B_FY, i] = 0.0
         x = pos[0, i] + vel[0, i] * dt
         y = pos[1, i] + vel[1, i] * dt
         if x > wall - r:
@@ -186,123 +301,67 @@ def _kinematics(
     return worst
 
 
-@numba.njit(cache=True, inline="always")
-def _contact(
-    nx: float,
-    ny: float,
-    overlap: float,
-    spring: float,
-    dvx: float,
-    dvy: float,
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pair(
+    i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
+    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
-) -> tuple[float, float]:
-    """Spring along -n, dashpot on the whole relative velocity, shear on its tangential part."""
-    vn = dvx * nx + dvy * ny
-    fx = -spring * overlap * nx + prm[P_DAMPING] * dvx + prm[P_SHEAR] * (dvx - vn * nx)
-    fy = -spring * overlap * ny + prm[P_DAMPING] * dvy + prm[P_SHEAR] * (dvy - vn * ny)
-    return fx, fy
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """One pair (j > i, rel = pj - pi): contact (spring, dashpot, shear) when they overlap, else
+    the magnets within the cutoff. j gets -f and |f| in its sum at once; returns what i gets
+    (f and its contact and attraction magnitudes). A free particle touching a member is marked
+    to join the robot."""
+    c = ri + body[B_R, j]
+    reach = c + prm[P_CUTOFF]
+    if d2 >= reach * reach or d2 == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    nx = dx / d
+    ny = dy / d
+    contact = 0.0
+    attract = 0.0
+    if d < c:
+        px, py = _contact(
+            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
+        )
+        contact = math.sqrt(px * px + py * py)
+        body[B_FR, j] += contact
+        touching = True
+    else:
+        strength = magi * body[B_MAG, j]
+        px = 0.0
+        py = 0.0
+        if strength > 0.0:
+            attract = _magnet(d - c, strength, prm)
+            px = attract * nx
+            py = attract * ny
+            body[B_FA, j] += attract
+        touching = d - c < prm[P_TOUCH_GAP]
+    body[B_FX, j] -= px
+    body[B_FY, j] -= py
+    if touching and kind_i != flags[F_KIND, j]:
+        if kind_i == FREE and flags[F_KIND, j] == MEMBER:
+            flags[F_JOINED, i] = 1
+        elif kind_i == MEMBER and flags[F_KIND, j] == FREE:
+            flags[F_JOINED, j] = 1
+    return px, py, contact, attract
 
 
-@numba.njit(cache=True, inline="always")
-def _obstacle_push(
-    x: float, y: float, r: float, rects: FloatArray, circles: FloatArray
-) -> tuple[float, float, float]:
-    """The deepest obstacle overlap of a disc: unit normal (out of the obstacle) and depth
-    summed per obstacle as (nx * depth, ny * depth, total depth); the caller applies the spring."""
-    px = 0.0
-    py = 0.0
-    total = 0.0
-    for o in range(rects.shape[0]):
-        x1 = rects[o, 0]
-        x2 = rects[o, 1]
-        y1 = rects[o, 2]
-        y2 = rects[o, 3]
-        if x < x1 - r or x > x2 + r or y < y1 - r or y > y2 + r:
-            continue
-        qx = min(max(x, x1), x2)
-        qy = min(max(y, y1), y2)
-        dx = x - qx
-        dy = y - qy
-        d2 = dx * dx + dy * dy
-        if d2 > 0.0:
-            d = math.sqrt(d2)
-            if d < r:
-                depth = r - d
-                px += dx / d * depth
-                py += dy / d * depth
-                total += depth
-        else:
-            # Centre inside: out through the nearest face, the shortest way.
-            left = x - x1
-            right = x2 - x
-            below = y - y1
-            above = y2 - y
-            least = min(min(left, right), min(below, above))
-            depth = least + r
-            if least == left:
-                px -= depth
-            elif least == right:
-                px += depth
-            elif least == below:
-                py -= depth
-            else:
-                py += depth
-            total += depth
-    for o in range(circles.shape[0]):
-        dx = x - circles[o, 0]
-        dy = y - circles[o, 1]
-        reach = r + circles[o, 2]
-        d2 = dx * dx + dy * dy
-        if d2 < reach * reach and d2 > 0.0:
-            d = math.sqrt(d2)
-            depth = reach - d
-            px += dx / d * depth
-            py += dy / d * depth
-            total += depth
-    return px, py, total
-
-
-@numba.njit(cache=True)
-def _forces(
-    lo: int,
-    hi: int,
-    pos: FloatArray,
-    vel: FloatArray,
-    vel2: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-    rects: FloatArray,
-    circles: FloatArray,
-    objects: FloatArray,
-    acc: FloatArray,
-    prm: FloatArray,
-) -> None:
-    """Second half of a step for particles lo..hi: forces from the new positions and the old
-    velocities (pairs, obstacles, passive objects), then the velocity with ground friction into
-    vel2; the contact and attraction sums for the next servo update. What the particles do to
-    each passive object is added to acc (this chunk's row)."""
-    dt = prm[P_DT]
-    spring = prm[P_SPRING]
-    cutoff = prm[P_CUTOFF]
-    touch = prm[P_TOUCH_GAP]
-    friction_dv = prm[P_FRICTION] * dt
-    static = prm[P_STATIC]
-    rest = prm[P_REST_SPEED]
-    wall_spring = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
-    damping = prm[P_DAMPING]
-    shear = prm[P_SHEAR]
-    acc[:, :] = 0.0
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+) -> None:  # fmt: skip
+    """Second pass: every listed pair (i in lo..hi, j > i) once, from the new positions and old
+    velocities; i gets f and j gets -f, both get |f| in their contact or attraction sum."""
     for i in range(lo, hi):
         xi = pos[0, i]
         yi = pos[1, i]
-        vxi = vel[0, i]
-        vyi = vel[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
         ri = body[B_R, i]
         magi = body[B_MAG, i]
-        free = flags[F_KIND, i] == FREE
-        joined = False
+        kind_i = flags[F_KIND, i]
         fx = 0.0
         fy = 0.0
         f_contact = 0.0
@@ -311,44 +370,47 @@ def _forces(
             j = nbr[i, k]
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
-            c = ri + body[B_R, j]
-            d2 = dx * dx + dy * dy
-            reach = c + cutoff
-            if d2 >= reach * reach or d2 == 0.0:
-                continue
-            d = math.sqrt(d2)
-            nx = dx / d
-            ny = dy / d
-            if d < c:
-                px, py = _contact(nx, ny, c - d, spring, vel[0, j] - vxi, vel[1, j] - vyi, prm)
-                fx += px
-                fy += py
-                f_contact += math.sqrt(px * px + py * py)
-                if free and flags[F_KIND, j] == MEMBER:
-                    joined = True
-            else:
-                gap = d - c
-                strength = magi * body[B_MAG, j]
-                if strength > 0.0:
-                    pull = _magnet(gap, strength, prm)
-                    fx += pull * nx
-                    fy += pull * ny
-                    f_attract += pull
-                if free and gap < touch and flags[F_KIND, j] == MEMBER:
-                    joined = True
-        # Fixed obstacles push with twice the spring, and damp the particle's own velocity.
-        ox, oy, depth = _obstacle_push(xi, yi, ri, rects, circles)
-        if depth > 0.0:
-            norm = math.sqrt(ox * ox + oy * oy)
-            nx = ox / norm if norm > 0.0 else 0.0
-            ny = oy / norm if norm > 0.0 else 0.0
-            vn = -vxi * nx - vyi * ny
-            px = wall_spring * ox - damping * vxi + shear * (-vxi - vn * nx)
-            py = wall_spring * oy - damping * vyi + shear * (-vyi - vn * ny)
+            px, py, contact, attract = _pair(
+                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
+                flags, prm,
+            )  # fmt: skip
             fx += px
             fy += py
-            f_contact += math.sqrt(px * px + py * py)
-        # Passive objects: the same pair laws, their magnets scaled by their factor.
+            f_contact += contact
+            f_attract += attract
+        body[B_FX, i] += fx
+        body[B_FY, i] += fy
+        body[B_FR, i] += f_contact
+        body[B_FA, i] += f_attract
+
+
+@numba.njit(cache=True)
+def _settle(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
+    prm: FloatArray,
+) -> None:  # fmt: skip
+    """Third pass: obstacles and passive objects act on particles lo..hi (what the particles do
+    to object m goes to acc[m]), then every particle's velocity with ground friction."""
+    spring = prm[P_SPRING]
+    cutoff = prm[P_CUTOFF]
+    slide = prm[P_FRICTION]
+    static = prm[P_STATIC]
+    acc[:, :] = 0.0
+    check_obstacles = rects.shape[0] + circles.shape[0] > 0
+    for i in range(lo, hi):
+        xi = pos[0, i]
+        yi = pos[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
+        ri = body[B_R, i]
+        fx = body[B_FX, i]
+        fy = body[B_FY, i]
+        if check_obstacles:
+            px, py, size = _obstacle_force(xi, yi, ri, vxi, vyi, rects, circles, prm)
+            fx += px
+            fy += py
+            body[B_FR, i] += size
         for m in range(objects.shape[0]):
             dx = objects[m, O_X] - xi
             dy = objects[m, O_Y] - yi
@@ -364,62 +426,51 @@ def _forces(
                 dvx = objects[m, O_VX] - vxi
                 dvy = objects[m, O_VY] - vyi
                 px, py = _contact(nx, ny, c - d, spring, dvx, dvy, prm)
-                fx += px
-                fy += py
-                size = math.sqrt(px * px + py * py)
-                f_contact += size
-                acc[m, 0] -= px
-                acc[m, 1] -= py
-                acc[m, 2] += size
+                body[B_FR, i] += math.sqrt(px * px + py * py)
             else:
-                strength = magi * objects[m, O_MAG]
-                if strength > 0.0:
-                    pull = _magnet(d - c, strength, prm)
-                    fx += pull * nx
-                    fy += pull * ny
-                    f_attract += pull
-                    acc[m, 0] -= pull * nx
-                    acc[m, 1] -= pull * ny
-                    acc[m, 3] += pull
-        body[B_FR, i] = f_contact
-        body[B_FA, i] = f_attract
-        if joined:
-            flags[F_JOINED, i] = 1
-        # Ground friction: static below the threshold at rest, then sliding deceleration.
-        if vxi * vxi + vyi * vyi < rest * rest and fx * fx + fy * fy < static * static:
-            fx = 0.0
-            fy = 0.0
-        vx = vxi + fx * dt
-        vy = vyi + fy * dt
-        speed = math.sqrt(vx * vx + vy * vy)
-        if speed < friction_dv:
-            vx = 0.0
-            vy = 0.0
-        else:
-            scale = 1.0 - friction_dv / speed
-            vx *= scale
-            vy *= scale
-        vel2[0, i] = vx
-        vel2[1, i] = vy
+                strength = body[B_MAG, i] * objects[m, O_MAG]
+                if strength <= 0.0:
+                    continue
+                pull = _magnet(d - c, strength, prm)
+                px = pull * nx
+                py = pull * ny
+                body[B_FA, i] += pull
+            fx += px
+            fy += py
+            acc[m, 0] -= px
+            acc[m, 1] -= py
+        vel[0, i], vel[1, i] = _friction(vxi, vyi, fx, fy, 1.0, slide, static, prm)
 
 
 @numba.njit(cache=True)
-def _objects_step(
-    objects: FloatArray,
-    acc: FloatArray,
-    chunks: int,
-    rects: FloatArray,
-    circles: FloatArray,
-    prm: FloatArray,
-) -> None:
-    """Passive objects' velocities from the particles' pushes (acc), each other, obstacles and
-    friction; called after the particles' force pass, positions already advanced."""
+def _objects_move(objects: FloatArray, prm: FloatArray) -> None:
+    """Passive objects' positions from their velocities, reflected by the walls."""
     dt = prm[P_DT]
+    wall = prm[P_HALF_WIDTH]
+    for m in range(objects.shape[0]):
+        r = objects[m, O_R]
+        for axis, speed in ((O_X, O_VX), (O_Y, O_VY)):
+            value = objects[m, axis] + objects[m, speed] * dt
+            if value > wall - r:
+                value = wall - r
+                objects[m, speed] = -objects[m, speed]
+            elif value < r - wall:
+                value = r - wall
+                objects[m, speed] = -objects[m, speed]
+            objects[m, axis] = value
+
+
+@numba.njit(cache=True)
+def _objects_settle(
+    objects: FloatArray, acc: FloatArray, rects: FloatArray, circles: FloatArray, prm: FloatArray
+) -> None:
+    """Passive objects' velocities from the particles' pushes (acc, summed over chunks in
+    order), each other, obstacles and their own friction."""
     count = objects.shape[0]
     fxs = np.zeros(count)
     fys = np.zeros(count)
     for m in range(count):
-        for c in range(chunks):
+        for c in range(acc.shape[0]):
             fxs[m] += acc[c, m, 0]
             fys[m] += acc[c, m, 1]
         xm = objects[m, O_X]
@@ -449,77 +500,27 @@ def _objects_step(
                 py = pull * ny
             fxs[m] += px
             fys[m] += py
-        ox, oy, depth = _obstacle_push(xm, ym, rm, rects, circles)
-        if depth > 0.0:
-            norm = math.sqrt(ox * ox + oy * oy)
-            nx = ox / norm
-            ny = oy / norm
-            vn = -vxm * nx - vym * ny
-            k2 = prm[P_SPRING] * prm[P_OBSTACLE_SPRING]
-            fxs[m] += k2 * ox - prm[P_DAMPING] * vxm + prm[P_SHEAR] * (-vxm - vn * nx)
-            fys[m] += k2 * oy - prm[P_DAMPING] * vym + prm[P_SHEAR] * (-vym - vn * ny)
+        px, py, _ = _obstacle_force(xm, ym, rm, vxm, vym, rects, circles, prm)
+        fxs[m] += px
+        fys[m] += py
     for m in range(count):
-        vx = objects[m, O_VX]
-        vy = objects[m, O_VY]
-        fx = fxs[m]
-        fy = fys[m]
-        rest = prm[P_REST_SPEED]
-        static = objects[m, O_STATIC]
-        if vx * vx + vy * vy < rest * rest and fx * fx + fy * fy < static * static:
-            fx = 0.0
-            fy = 0.0
-        vx += fx * objects[m, O_INV_MASS] * dt
-        vy += fy * objects[m, O_INV_MASS] * dt
-        speed = math.sqrt(vx * vx + vy * vy)
-        slow = objects[m, O_FRICTION] * dt
-        if speed < slow:
-            vx = 0.0
-            vy = 0.0
-        else:
-            vx *= 1.0 - slow / speed
-            vy *= 1.0 - slow / speed
+        vx, vy = _friction(
+            objects[m, O_VX], objects[m, O_VY], fxs[m], fys[m], objects[m, O_INV_MASS],
+            objects[m, O_FRICTION], objects[m, O_STATIC], prm,
+        )  # fmt: skip
         objects[m, O_VX] = vx
         objects[m, O_VY] = vy
 
 
-@numba.njit(cache=True)
-def _objects_move(objects: FloatArray, prm: FloatArray) -> None:
-    """Passive objects' positions from their velocities, reflected by the walls."""
-    dt = prm[P_DT]
-    wall = prm[P_HALF_WIDTH]
-    for m in range(objects.shape[0]):
-        r = objects[m, O_R]
-        for axis, speed in ((O_X, O_VX), (O_Y, O_VY)):
-            value = objects[m, axis] + objects[m, speed] * dt
-            if value > wall - r:
-                value = wall - r
-                objects[m, speed] = -objects[m, speed]
-            elif value < r - wall:
-                value = r - wall
-                objects[m, speed] = -objects[m, speed]
-            objects[m, axis] = value
-
-
-# ---- neighbour lists ------------------------------------------------------------------------
+# ---- neighbour lists ---------------------------------------------------------------------------
 
 
 @numba.njit(cache=True)
-def _grid(
-    pos: FloatArray, radius: float
-) -> tuple[
-    float,
-    float,
-    float,
-    int,
-    int,
-    npt.NDArray[np.int64],
-    npt.NDArray[np.int64],
-    npt.NDArray[np.int64],
-]:
-    """Bins particles into square cells at least `radius` wide over their bounding box (cells are
-    widened so that there are at most about 2 per particle); returns the grid's origin, cell size,
-    shape, each particle's cell, and the particles cell by cell (start offsets and members, in
-    index order within a cell: a stable counting sort)."""
+def _grid(pos: FloatArray, radius: float) -> tuple[int, int, IntArray, IntArray, IntArray]:
+    """Bins particles into square cells at least `radius` wide over their bounding box (wider
+    when needed to keep at most ~2 cells per particle). Returns the grid's shape, each
+    particle's cell (row-major), the cells' start offsets and the particles cell by cell (a
+    stable counting sort: index order within a cell)."""
     n = pos.shape[1]
     x0 = pos[0, 0]
     x1 = x0
@@ -548,26 +549,20 @@ def _grid(
     for i in range(n):
         members[fill[cells[i]]] = i
         fill[cells[i]] += 1
-    return x0, y0, size, ncx, ncy, cells, start, members
+    return ncx, ncy, cells, start, members
 
 
 @numba.njit(cache=True)
 def _fill_lists(
-    lo: int,
-    hi: int,
-    pos: FloatArray,
-    cells: npt.NDArray[np.int64],
-    start: npt.NDArray[np.int64],
-    members: npt.NDArray[np.int64],
-    ncx: int,
-    ncy: int,
-    radius: float,
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-) -> int:
-    """Neighbour lists of particles lo..hi from the grid (3 x 3 cells); returns the longest list
-    found, which may exceed nbr's width (then the lists are incomplete and must be redone)."""
-    width = nbr.shape[1]
+    lo: int, hi: int, pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    radius: float, nbr: ListArray, ncount: npt.NDArray[np.int32],
+) -> int:  # fmt: skip
+    """Half lists of particles lo..hi, the particles being in cell order: the later ones of its
+    own cell and the cell to its right (one run of indices), then the three cells above (another
+    run). Returns the longest list found, which may exceed nbr's width (then redo wider)."""
+    # Branch-free: every candidate is written at the list's end and kept only if close (the
+    # test is a coin toss a branch predictor loses); the last column is that scratch slot.
+    width = nbr.shape[1] - 1
     longest = 0
     r2 = radius * radius
     for i in range(lo, hi):
@@ -576,52 +571,36 @@ def _fill_lists(
         xi = pos[0, i]
         yi = pos[1, i]
         count = 0
-        for gy in range(max(cy - 1, 0), min(cy + 2, ncy)):
-            for gx in range(max(cx - 1, 0), min(cx + 2, ncx)):
-                c = gy * ncx + gx
-                for p in range(start[c], start[c + 1]):
-                    j = members[p]
-                    if j == i:
-                        continue
-                    dx = pos[0, j] - xi
-                    dy = pos[1, j] - yi
-                    if dx * dx + dy * dy < r2:
-                        if count < width:
-                            nbr[i, count] = j
-                        count += 1
+        row = cy * ncx
+        right = min(cx + 1, ncx - 1)
+        for j in range(i + 1, start[row + right + 1]):
+            dx = pos[0, j] - xi
+            dy = pos[1, j] - yi
+            nbr[i, min(count, width)] = j
+            count += dx * dx + dy * dy < r2
+        if cy + 1 < ncy:
+            above = row + ncx
+            for j in range(start[above + max(cx - 1, 0)], start[above + right + 1]):
+                dx = pos[0, j] - xi
+                dy = pos[1, j] - yi
+                nbr[i, min(count, width)] = j
+                count += dx * dx + dy * dy < r2
         ncount[i] = min(count, width)
         longest = max(longest, count)
     return longest
 
 
-@numba.njit(cache=True)
-def _permute_rows(rows: npt.NDArray, order: npt.NDArray[np.int64], lo: int, hi: int) -> None:
-    """rows[:, lo:hi] = rows[:, order[lo:hi]] through a scratch copy of the whole array."""
-    scratch = rows.copy()
-    for r in range(rows.shape[0]):
-        for p in range(lo, hi):
-            rows[r, p] = scratch[r, order[p]]
-
-
 @numba.njit(parallel=True, cache=True)
 def _fill_chunks(
-    bounds: npt.NDArray[np.int64],
-    pos: FloatArray,
-    cells: npt.NDArray[np.int64],
-    start: npt.NDArray[np.int64],
-    members: npt.NDArray[np.int64],
-    ncx: int,
-    ncy: int,
-    radius: float,
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-) -> int:
+    bounds: IntArray, pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    radius: float, nbr: ListArray, ncount: npt.NDArray[np.int32],
+) -> int:  # fmt: skip
     """_fill_lists over every chunk in parallel; the longest list found."""
     chunks = bounds.shape[0] - 1
     longest = np.zeros(chunks, dtype=np.int64)
     for c in numba.prange(chunks):
         longest[c] = _fill_lists(
-            bounds[c], bounds[c + 1], pos, cells, start, members, ncx, ncy, radius, nbr, ncount
+            bounds[c], bounds[c + 1], pos, cells, start, ncx, ncy, radius, nbr, ncount
         )
     most = 0
     for c in range(chunks):
@@ -630,48 +609,88 @@ def _fill_chunks(
 
 
 @numba.njit(cache=True)
-def build_lists(
-    pos: FloatArray,
-    ref: FloatArray,
-    vel: FloatArray,
-    vel_old: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
-    ext: npt.NDArray[np.int64],
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-    bounds: npt.NDArray[np.int64],
-    prm: FloatArray,
-    sort: bool,
-) -> npt.NDArray[np.int32]:
-    """Rebuilds every neighbour list from the current positions, first putting the particles in
-    grid-cell order when `sort` (every per-particle row and `ext` follow); the positions become
-    the lists' reference. Returns the lists' array (a wider one if some list did not fit)."""
-    radius = prm[P_LIST_RADIUS]
+def _permute(rows: npt.NDArray, order: IntArray) -> None:
+    """rows[:, p] = rows[:, order[p]] for every p, through a scratch copy."""
+    scratch = rows.copy()
+    for r in range(rows.shape[0]):
+        for p in range(rows.shape[1]):
+            rows[r, p] = scratch[r, order[p]]
+
+
+@numba.njit(cache=True)
+def _row_bounds(start: IntArray, ncx: int, ncy: int, bounds: IntArray) -> None:
+    """Chunk bounds on grid-row boundaries, about equal in particles; with fewer rows than
+    chunks the last chunks are empty. A chunk's pairs then reach no further than the next."""
     chunks = bounds.shape[0] - 1
+    n = start[ncx * ncy]
+    bounds[0] = 0
+    c = 1
+    for row in range(1, ncy):
+        if c >= chunks:
+            break
+        offset = start[row * ncx]
+        if offset >= c * n // chunks and offset > bounds[c - 1]:
+            bounds[c] = offset
+            c += 1
+    for rest in range(c, chunks + 1):
+        bounds[rest] = n
+
+
+@numba.njit(cache=True)
+def _prepare(
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, ext: IntArray, bounds: IntArray, prm: FloatArray, sort: bool,
+) -> tuple[int, int, IntArray, IntArray]:  # fmt: skip
+    """The first half of a list build: grid the particles, put them in grid-cell order when
+    `sort` (every per-particle row and `ext` follow; without it they must already be in that
+    order, as after a restore from the lists' reference positions), make the positions the
+    lists' reference and re-cut the chunk bounds on grid rows. Returns the grid (shape, each
+    particle's cell, the cells' start offsets)."""
     n = pos.shape[1]
-    _, _, _, ncx, ncy, cells, start, members = _grid(pos, radius)
+    ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
     if sort:
-        _permute_rows(pos, members, 0, n)
-        _permute_rows(vel, members, 0, n)
-        _permute_rows(vel_old, members, 0, n)
-        _permute_rows(body, members, 0, n)
-        _permute_rows(flags, members, 0, n)
-        scratch = ext.copy()
-        for p in range(n):
-            ext[p] = scratch[members[p]]
-        _, _, _, ncx, ncy, cells, start, members = _grid(pos, radius)
+        _permute(pos, members)
+        _permute(vel, members)
+        _permute(body, members)
+        _permute(flags, members)
+        _permute(ext.reshape(1, n), members)
+        _permute(cells.reshape(1, n), members)  # the same grid, now in cell order
+        vel_old[:, :] = vel
     for i in range(n):
         ref[0, i] = pos[0, i]
         ref[1, i] = pos[1, i]
+    _row_bounds(start, ncx, ncy, bounds)
+    return ncx, ncy, cells, start
+
+
+@numba.njit(cache=True)
+def _fill(
+    pos: FloatArray, cells: IntArray, start: IntArray, ncx: int, ncy: int, nbr: ListArray,
+    ncount: npt.NDArray[np.int32], bounds: IntArray, prm: FloatArray,
+) -> ListArray:  # fmt: skip
+    """The second half: the half lists, in a wider array if some list did not fit."""
+    radius = prm[P_LIST_RADIUS]
+    n = pos.shape[1]
     while True:
-        if chunks == 1:
-            need = _fill_lists(0, n, pos, cells, start, members, ncx, ncy, radius, nbr, ncount)
+        if bounds.shape[0] == 2:
+            need = _fill_lists(0, n, pos, cells, start, ncx, ncy, radius, nbr, ncount)
         else:
-            need = _fill_chunks(bounds, pos, cells, start, members, ncx, ncy, radius, nbr, ncount)
-        if need <= nbr.shape[1]:
+            need = _fill_chunks(bounds, pos, cells, start, ncx, ncy, radius, nbr, ncount)
+        if need < nbr.shape[1]:
             return nbr
-        nbr = np.empty((n, need + 8), dtype=np.int32)
+        nbr = np.empty((n, need + 5), dtype=np.int32)
+
+
+@numba.njit(cache=True)
+def build_lists(
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32],
+    bounds: IntArray, prm: FloatArray, sort: bool,
+) -> ListArray:  # fmt: skip
+    """Rebuilds the half neighbour lists from the current positions (see _prepare). Returns the
+    lists' array (a wider one if some list did not fit)."""
+    ncx, ncy, cells, start = _prepare(pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort)
+    return _fill(pos, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
 
 
 # ---- the step loop ----------------------------------------------------------------------------
@@ -679,18 +698,10 @@ def build_lists(
 
 @numba.njit(parallel=True, cache=True)
 def _kinematics_chunks(
-    bounds: npt.NDArray[np.int64],
-    step: int,
-    targets: FloatArray,
-    ext: npt.NDArray[np.int64],
-    pos: FloatArray,
-    ref: FloatArray,
-    vel: FloatArray,
-    vel_old: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
+    bounds: IntArray, step: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
-) -> float:
+) -> float:  # fmt: skip
     """_kinematics over every chunk in parallel; the largest squared displacement."""
     chunks = bounds.shape[0] - 1
     worst = np.zeros(chunks)
@@ -705,58 +716,49 @@ def _kinematics_chunks(
 
 
 @numba.njit(parallel=True, cache=True)
-def _forces_chunks(
-    bounds: npt.NDArray[np.int64],
-    pos: FloatArray,
-    vel_old: FloatArray,
-    vel: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-    rects: FloatArray,
-    circles: FloatArray,
-    objects: FloatArray,
-    acc: FloatArray,
+def _pairs_chunks(
+    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs over the even (parity 0) or odd (1) chunks in parallel: they write only their own
+    chunk and the next, which no other chunk of the same parity touches."""
+    chunks = bounds.shape[0] - 1
+    for half in numba.prange((chunks - parity + 1) // 2):
+        c = 2 * half + parity
+        _pairs(bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, prm)
+
+
+@numba.njit(parallel=True, cache=True)
+def _settle_chunks(
+    bounds: IntArray, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
     prm: FloatArray,
-) -> None:
-    """_forces over every chunk in parallel."""
+) -> None:  # fmt: skip
+    """_settle over every chunk in parallel."""
     for c in numba.prange(bounds.shape[0] - 1):
-        _forces(
-            bounds[c], bounds[c + 1], pos, vel_old, vel, body, flags, nbr, ncount, rects,
-            circles, objects, acc[c], prm,
+        _settle(
+            bounds[c], bounds[c + 1], pos, vel_old, vel, body, rects, circles, objects, acc[c],
+            prm,
         )  # fmt: skip
 
 
 @numba.njit(cache=True)
 def advance(
-    steps: int,
-    targets: FloatArray,
-    ext: npt.NDArray[np.int64],
-    pos: FloatArray,
-    ref: FloatArray,
-    vel: FloatArray,
-    vel_old: FloatArray,
-    body: FloatArray,
-    flags: npt.NDArray[np.uint8],
-    nbr: npt.NDArray[np.int32],
-    ncount: npt.NDArray[np.int32],
-    rects: FloatArray,
-    circles: FloatArray,
-    objects: FloatArray,
-    acc: FloatArray,
-    bounds: npt.NDArray[np.int64],
-    prm: FloatArray,
-) -> tuple[npt.NDArray[np.int32], int]:
-    """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). One chunk
-    runs inline (no parallel region to start), several in parallel. Returns the neighbour lists'
-    array (possibly a new, wider one) and how many times the lists were rebuilt."""
-    chunks = bounds.shape[0] - 1
+    steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
+    vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
+    ncount: npt.NDArray[np.int32], rects: FloatArray, circles: FloatArray, objects: FloatArray,
+    acc: FloatArray, bounds: IntArray, prm: FloatArray,
+) -> tuple[ListArray, int]:  # fmt: skip
+    """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
+    chunk everything runs inline (no parallel region to start), with several in parallel.
+    Returns the neighbour lists' array (possibly a new, wider one) and how many times the lists
+    were rebuilt."""
     n = pos.shape[1]
+    inline = bounds.shape[0] == 2
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
     rebuilds = 0
     for s in range(steps):
-        if chunks == 1:
+        if inline:
             moved = _kinematics(0, n, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm)
         else:
             moved = _kinematics_chunks(
@@ -768,16 +770,15 @@ def advance(
                 pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
             )
             rebuilds += 1
-        if chunks == 1:
-            _forces(
-                0, n, pos, vel_old, vel, body, flags, nbr, ncount, rects, circles, objects,
-                acc[0], prm,
-            )  # fmt: skip
+        if inline:
+            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
         else:
-            _forces_chunks(
-                bounds, pos, vel_old, vel, body, flags, nbr, ncount, rects, circles, objects,
-                acc, prm,
-            )  # fmt: skip
+            _pairs_chunks(bounds, 0, pos, vel_old, body, flags, nbr, ncount, prm)
+            _pairs_chunks(bounds, 1, pos, vel_old, body, flags, nbr, ncount, prm)
+        if inline:
+            _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+        else:
+            _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
-            _objects_step(objects, acc, chunks, rects, circles, prm)
+            _objects_settle(objects, acc, rects, circles, prm)
     return nbr, rebuilds

@@ -42,10 +42,11 @@ class PhysicsParams:
     """Gap (m) below which the magnet force is the clamp."""
     blend_gap: float = 1.9e-3
     """Gap (m) where the linear blend from the clamp reaches A / gap^2."""
-    magnet_cutoff: float = 0.05
-    """DEVIATION: magnets act only across gaps below this (m). The published code reaches every
-    particle in a 5 x 5 block of cells 2 R_max wide (0.47-0.7 m, not isotropic); README measures
-    what the cutoff changes. math.inf is not allowed: use 0.6 for the published reach."""
+    magnet_cutoff: float = 0.01
+    """DEVIATION: magnets act only across gaps below this (m); beyond it their pull is under
+    0.48 N, a ninth of what moves a resting particle. The published code reaches every particle
+    in a 5 x 5 block of cells 2 R_max wide (0.47-0.7 m, not isotropic). Measured (README): 0.01,
+    0.05 and 0.6 m give the same speeds toward the light for 10 and 100 particles."""
 
     mu: float = 0.4
     """Ground friction coefficient."""

@@ -67,14 +67,15 @@ class Snapshot:
 class World:
     """A 2-D world of disc-shaped particles, run by a vectorised controller.
 
-    Particles keep the index the caller gave them (x[i], y[i]) in everything the World shows;
-    internally the kernels keep them sorted by space. Time advances in steps of params.dt with
-    step(n); observers added with add_observer() are called every so many steps (outputs live
-    there, never in the loop). The published model's order within a step: dead particles are
-    chosen when their time comes; the controller commands radii; the servo moves them (stall
-    limit); positions advance by the old velocities and walls reflect; forces from the new
-    positions and old velocities (contacts, magnets, obstacles, passive objects); velocities
-    with ground friction; t += dt.
+    Particles start at rest (or with `velocity`: vx, vy arrays, as a published CSV resumes),
+    contracted (or with `radius`). Particles keep the index the caller gave them (x[i], y[i]) in
+    everything the World shows; internally the kernels keep them sorted by space. Time advances
+    in steps of params.dt with step(n); observers added with add_observer() are called every so
+    many steps (outputs live there, never in the loop). The published model's order within a
+    step: dead particles are chosen when their time comes; the controller commands radii; the
+    servo moves them (stall limit); positions advance by the old velocities and walls reflect;
+    forces from the new positions and old velocities (contacts, magnets, obstacles, passive
+    objects); velocities with ground friction; t += dt.
     """
 
     _nbr: npt.NDArray[np.int32]
@@ -94,6 +95,7 @@ class World:
         free: npt.ArrayLike | None = None,
         dead: DeadParticles | None = None,
         radius: npt.ArrayLike | None = None,
+        velocity: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
         seed: int = 0,
         precision: Precision = "float64",
     ) -> None:
@@ -124,6 +126,14 @@ class World:
         self._pos = np.stack([xs, ys])
         self._ref = self._pos.copy()
         self._vel = np.zeros((2, n), dtype=ftype)
+        if velocity is not None:
+            vx = np.array(velocity[0], dtype=np.float64).ravel()
+            vy = np.array(velocity[1], dtype=np.float64).ravel()
+            finite = bool(np.isfinite(vx).all() and np.isfinite(vy).all())
+            if vx.shape != (n,) or vy.shape != (n,) or not finite:
+                raise ValueError("velocity must give finite vx and vy for every particle")
+            self._vel[0] = vx
+            self._vel[1] = vy
         self._vel_old = np.zeros((2, n), dtype=ftype)
         self._body = np.zeros((k.BODY_ROWS, n), dtype=ftype)
         self._body[k.B_R] = radii

@@ -72,10 +72,13 @@ class PublishedSettings:
 
 @numba.njit(cache=True, inline="always")
 def _radius_at(
-    t: float, phase: float, cycle: float, rise: float, r_min: float, stroke: float
+    clock: float, offset: float, cycle: float, rise: float, r_min: float, stroke: float
 ) -> float:
-    """The commanded radius at t for a phase: rising, falling, or NaN (rest: hold)."""
-    tau = (t + phase) % cycle
+    """The commanded radius at a point of the cycle (clock, in [0, cycle)) for a phase offset
+    (in [0, cycle)): rising, falling, or NaN (rest: hold)."""
+    tau = clock + offset
+    if tau >= cycle:
+        tau -= cycle
     if tau < rise:
         return r_min + stroke * tau / rise
     if tau < 2.0 * rise:
@@ -86,23 +89,23 @@ def _radius_at(
 @numba.njit(parallel=True, cache=True)
 def _fill(
     times: FloatArray,
-    phase: FloatArray,
+    offset: FloatArray,
     cycle: float,
     rise: float,
     r_min: float,
     stroke: float,
     out: FloatArray,
 ) -> None:
-    """out[j, i] = the commanded radius of particle i at times[j]."""
-    n = phase.shape[0]
+    """out[j, i] = the commanded radius of particle i at times[j]; offset = phase mod cycle."""
+    n = offset.shape[0]
     for j in range(times.shape[0]):
-        t = times[j]
+        clock = times[j] % cycle
         if n < _PARALLEL_FROM:
             for i in range(n):
-                out[j, i] = _radius_at(t, phase[i], cycle, rise, r_min, stroke)
+                out[j, i] = _radius_at(clock, offset[i], cycle, rise, r_min, stroke)
         else:
             for i in numba.prange(n):
-                out[j, i] = _radius_at(t, phase[i], cycle, rise, r_min, stroke)
+                out[j, i] = _radius_at(clock, offset[i], cycle, rise, r_min, stroke)
 
 
 class PublishedController(Controller):
@@ -111,6 +114,7 @@ class PublishedController(Controller):
     def __init__(self, settings: PublishedSettings | None = None) -> None:
         self.settings = settings if settings is not None else PublishedSettings()
         self._phase = np.zeros(0)
+        self._offset = np.zeros(0)
         self._rng = np.random.default_rng()
         self._updates = 0
 
@@ -121,6 +125,7 @@ class PublishedController(Controller):
 
     def bind(self, count: int, rng: np.random.Generator) -> None:
         self._phase = np.zeros(count)
+        self._offset = np.zeros(count)
         self._rng = rng
         self._updates = 0
 
@@ -131,7 +136,7 @@ class PublishedController(Controller):
     def command_ahead(self, view: WorldView, dt: float, out: FloatArray) -> int:
         first = round(view.t / dt)
         self._update_if_due(view, view.t)
-        times = np.asarray((first + np.arange(out.shape[0])) * dt, dtype=np.float64)
+        times = (first + np.arange(out.shape[0], dtype=np.float64)) * dt
         # Stop before the next update: it needs the world as it will be then.
         due = self._updates * self.settings.update_s - _TIME_TOLERANCE
         rows = max(1, int(np.searchsorted(times, due, side="left")))
@@ -162,8 +167,9 @@ class PublishedController(Controller):
         phase[~lit] = -(s.nx - 1) * s.rise_s
         phase += self._rng.normal(0.0, s.phase_noise * s.rise_s, view.count)
         self._phase = phase
+        self._offset = np.mod(phase, s.cycle_s)
 
     def _fill(self, times: FloatArray, view: WorldView, out: FloatArray) -> None:
         s = self.settings
         r_min = view.r_min
-        _fill(times, self._phase, s.cycle_s, s.rise_s, r_min, view.r_max - r_min, out)
+        _fill(times, self._offset, s.cycle_s, s.rise_s, r_min, view.r_max - r_min, out)

@@ -1,0 +1,259 @@
+#!/usr/bin/env python3
+"""Measures the world's fidelity to the paper: speed toward the light (Table S3, 0 % dead) with the
+published controller, beside what each suspect of a difference changes; plots it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from particlebot.protocol import Method
+from particlebot.sim.particles.model.firmware import FirmwareController, FirmwareSettings
+from particlebot.sim.particles.model.published import PublishedController, PublishedSettings
+from particlebot.sim.scenarios.placement import algorithm5
+from particlebot.sim.world import Lamp, PhysicsParams, World
+from particlebot.studies.definitions import FAR_LAMP_M
+from particlebot.studies.packing import densest_packing_diameter_m
+from particlebot.studies.published import TABLE_S3_MM_S
+
+R_MIN = PhysicsParams().r_min
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One way of running the published model: our defaults, or one suspect changed."""
+
+    name: str
+    physics: dict[str, Any] = field(default_factory=dict)
+    controller: dict[str, Any] = field(default_factory=dict)
+    placement: str = "algorithm5"
+    """'algorithm5' (SI Algorithm 5) or 'published-code' (what the published code does)."""
+    lamp_dpd: float | None = None
+    """The lamp this many DPD from the first particle (the published main: 3.5); None: 20 m
+    beyond the densest-packing edge, as the studies put it, so that no swarm reaches it."""
+    precision: str = "float64"
+
+
+VARIANTS = [
+    Variant("ours (published defaults)"),
+    Variant("magnets uncut (0.6 m, the published reach)", physics={"magnet_cutoff": 0.6}),
+    Variant("magnets cut at 5 cm", physics={"magnet_cutoff": 0.05}),
+    Variant("attraction 1x (fitted A)", physics={"attraction": 1.5884e-5}),
+    Variant("static friction 1x mu g", physics={"static_factor": 1.0}),
+    Variant("no phase noise", controller={"phase_noise": 0.0}),
+    Variant("shear 20 (does not boil)", physics={"shear": 20.0}),
+    Variant("float32", precision="float32"),
+    Variant("the published code's placement", placement="published-code"),
+    Variant("lamp at 3.5 DPD (published main)", lamp_dpd=3.5),
+]
+
+
+def published_code_placement(count: int, rng: np.random.Generator) -> np.ndarray:
+    """What the published code's CONFIG_RANDOM does (facts from its source, our code): tangent
+    to a random placed disc in a random direction (drawn again while it overlaps), then turned
+    about that disc in 10 degree steps until the next step would overlap; the third disc at the
+    first two's midpoint plus R_min sideways (so it overlaps both by 0.59 R_min)."""
+    placed = [np.zeros(2)]
+    step = math.radians(10.0)
+    for i in range(1, count):
+        xy = np.array(placed)
+        if i == 2:
+            d = (xy[1] - xy[0]) / np.linalg.norm(xy[1] - xy[0])
+            side = np.array([d[1], -d[0]]) if rng.integers(2) else np.array([-d[1], d[0]])
+            placed.append((xy[0] + xy[1]) / 2 + side * R_MIN)
+            continue
+        while True:
+            anchor = xy[rng.integers(i)]
+            theta = rng.uniform(0.0, 2 * math.pi)
+
+            def at(angle: float, anchor: np.ndarray = anchor) -> np.ndarray:
+                return anchor + 2 * R_MIN * np.array([math.cos(angle), math.sin(angle)])
+
+            def blocked(p: np.ndarray, xy: np.ndarray = xy) -> bool:
+                return bool((np.hypot(*(xy - p).T) < 2 * R_MIN - 1e-12).any())
+
+            if blocked(at(theta)):
+                continue
+            turned = theta
+            while turned - theta < 2 * math.pi and not blocked(at(turned + step)):
+                turned += step
+            placed.append(at(turned))
+            break
+    return np.array(placed)
+
+
+def speed_run(variant: Variant, count: int, seed: int, duration: float, skip: float) -> float:
+    """Speed toward the light (mm/s) from `skip` to `duration` of one run."""
+    rng = np.random.default_rng(seed)
+    if variant.placement == "published-code":
+        xy = published_code_placement(count, rng)
+    else:
+        xy = algorithm5(count, R_MIN, rng).xy
+    dpd = densest_packing_diameter_m(count)
+    lamp_x = -(variant.lamp_dpd * dpd if variant.lamp_dpd is not None else dpd / 2 + FAR_LAMP_M)
+    world = World(
+        xy[:, 0], xy[:, 1],
+        controller=PublishedController(PublishedSettings(**variant.controller)),
+        params=PhysicsParams(**variant.physics), lamp=Lamp(lamp_x, 0.0), seed=seed,
+        precision=variant.precision,  # type: ignore[arg-type]
+    )  # fmt: skip
+    world.run(skip)
+    start = world.light_distance()
+    world.run(duration - skip)
+    return (start - world.light_distance()) / (duration - skip) * 1000.0
+
+
+def firmware_line(seconds: float) -> dict[str, float]:
+    """A line of 5 particles 1 m from the lamp's foot, run by the firmware controller (each
+    method): how far its centroid came toward the lamp."""
+    moved = {}
+    for method in Method:
+        x = 1.0 + np.arange(5) * (2 * R_MIN + 0.5e-3)
+        controller = FirmwareController(FirmwareSettings(method=method, update_interval_s=60))
+        world = World(x, np.zeros(5), controller=controller, lamp=Lamp(0.0, 0.0), seed=1)
+        start = world.light_distance()
+        world.run(seconds)
+        moved[method.name] = (start - world.light_distance()) * 1000.0
+    return moved
+
+
+def boiling(path: Path, count: int = 3000) -> dict[str, dict[str, float]]:
+    """Particle speeds in an actuating Algorithm-5 blob: the published contact model at its
+    dt = 0.01 s, with half the shear, and at half the time step; their distributions plotted."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases: list[tuple[str, dict[str, Any]]] = [
+        ("published: shear 40, dt 0.01 s", {}),
+        ("shear 20, dt 0.01 s", {"shear": 20.0}),
+        ("shear 40, dt 0.005 s", {"dt": 0.005}),
+    ]
+    xy = algorithm5(count, R_MIN, np.random.default_rng(1)).xy
+    figures: dict[str, dict[str, float]] = {}
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    for label, physics in cases:
+        world = World(xy[:, 0], xy[:, 1], controller=PublishedController(),
+                      params=PhysicsParams(**physics), lamp=Lamp(-30.0, 0.0), seed=1)  # fmt: skip
+        world.run(60.0)
+        speeds = []
+        for _ in range(20):
+            world.run(0.5)
+            state = world.state()
+            speeds.append(np.hypot(state.vx, state.vy))
+        v = np.sort(np.concatenate(speeds))
+        figures[label] = {
+            "mean_m_s": float(v.mean()),
+            "p99_m_s": float(np.quantile(v, 0.99)),
+            "faster_than_0.1_m_s": float(np.mean(v > 0.1)),
+        }
+        share = 1.0 - np.arange(v.size) / v.size
+        ax.loglog(np.maximum(v, 1e-5), share, label=label)
+    ax.axvline(0.0222, color="grey", ls=":", lw=1)
+    ax.text(0.0222, 2e-4, " mu g dt: what sliding\n friction takes in a step", fontsize=8)
+    ax.set_xlabel("particle speed (m/s), 3,000 particles, samples over 10 s after 60 s")
+    ax.set_ylabel("share of particles faster")
+    ax.set_xlim(1e-5, 10)
+    ax.set_ylim(1e-4, 1.1)
+    ax.legend(fontsize=8)
+    ax.set_title("The published contact model boils in a blob at dt = 0.01 s")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return figures
+
+
+def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
+    """Per size: every variant's speeds (dots, mean +- sd) beside the paper's band."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sizes = sorted({n for per in results.values() for n in per})
+    fig, axes = plt.subplots(1, len(sizes), figsize=(6.5 * len(sizes), 5.2), sharey=True)
+    names = list(results)
+    for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
+        paper = TABLE_S3_MM_S[n][0.0]
+        ax.axvspan(paper.mean - paper.sd, paper.mean + paper.sd, color="gold", alpha=0.35,
+                   label=f"paper: {paper.mean:.2f} ± {paper.sd:.2f} mm/s")  # fmt: skip
+        ax.axvline(paper.mean, color="goldenrod")
+        for row, name in enumerate(names):
+            speeds = np.array(results[name].get(n, []))
+            if speeds.size == 0:
+                continue
+            y = len(names) - 1 - row
+            ax.plot(speeds, np.full(speeds.size, y) + np.linspace(-0.15, 0.15, speeds.size), "o",
+                    ms=3, color="tab:blue", alpha=0.6)  # fmt: skip
+            ax.errorbar(speeds.mean(), y, xerr=speeds.std(ddof=1), fmt="D", color="black",
+                        ms=5, capsize=3)  # fmt: skip
+        ax.set_yticks(range(len(names)), names[::-1])
+        ax.axvline(0.0, color="grey", lw=0.8)
+        ax.set_xlabel("speed toward the light, 30 min - 2 h (mm/s)")
+        ax.set_title(f"{n} particles, 0 % dead: {len(results[names[0]].get(n, []))} seeds")
+        ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100])
+    parser.add_argument("--seeds", type=int, default=11)
+    parser.add_argument("--duration", type=float, default=7200.0, help="simulated s")
+    parser.add_argument("--skip", type=float, default=1800.0, help="left out at the start (s)")
+    parser.add_argument("--variants", type=int, nargs="*", help="indices into the list (all)")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--out", type=Path, default=Path("docs/world"), help="figure and JSON")
+    args = parser.parse_args()
+    if not 0 <= args.skip < args.duration or args.seeds < 2:
+        parser.error("need 0 <= --skip < --duration and at least 2 seeds")
+    chosen = [VARIANTS[i] for i in args.variants] if args.variants else VARIANTS
+    jobs = [(v, n, s) for n in args.sizes for v in chosen for s in range(args.seeds)]
+    print(f"{len(jobs)} runs on {args.workers} processes; load {os.getloadavg()[0]:.1f}")
+    began = time.perf_counter()
+    results: dict[str, dict[int, list[float]]] = {v.name: {} for v in chosen}
+    with ProcessPoolExecutor(args.workers) as pool:
+        futures = [pool.submit(speed_run, v, n, s, args.duration, args.skip) for v, n, s in jobs]
+        for done, ((v, n, _), future) in enumerate(zip(jobs, futures, strict=True), start=1):
+            results[v.name].setdefault(n, []).append(future.result())
+            print(f"\r{done}/{len(jobs)} runs, {time.perf_counter() - began:.0f} s", end="",
+                  file=sys.stderr, flush=True)  # fmt: skip
+    print(file=sys.stderr)
+    for n in args.sizes:
+        paper = TABLE_S3_MM_S[n][0.0]
+        print(f"\n{n} particles (paper {paper.mean:.2f} ± {paper.sd:.2f} mm/s)")
+        for v in chosen:
+            s = np.array(results[v.name][n])
+            inside = "inside" if abs(s.mean() - paper.mean) <= paper.sd else "outside"
+            print(f"  {v.name:<46} {s.mean():6.3f} ± {s.std(ddof=1):5.3f} mm/s ({inside})")
+    line = firmware_line(300.0)
+    print("\nfirmware controller, line of 5, 5 min: " +
+          ", ".join(f"{m} {mm:.0f} mm" for m, mm in line.items()) + " toward the lamp")  # fmt: skip
+    args.out.mkdir(parents=True, exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "fidelity.json").write_text(json.dumps(
+        {"duration_s": args.duration, "skip_s": args.skip, "speeds_mm_s": results,
+         "firmware_line_mm": line}, indent=1))  # fmt: skip
+    plot(results, args.out / "fidelity.png")
+    boil = boiling(args.out / "boiling.png")
+    for label, figures in boil.items():
+        print(f"{label}: " + ", ".join(f"{k} {v:.3g}" for k, v in figures.items()))
+    print(f"wrote fidelity.json, fidelity.png and boiling.png into {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -16,9 +16,8 @@ import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Self
 
+from particlebot.closing import ClosedOnExit
 from particlebot.protocol.generated import (
     FRAME_OVERHEAD,
     MAX_PAYLOAD,
@@ -174,7 +173,7 @@ def _u16_array(values: Sequence[int]) -> ctypes.Array[ctypes.c_uint16]:
     return (ctypes.c_uint16 * len(values))(*values)
 
 
-class NativeParticle:
+class NativeParticle(ClosedOnExit):
     """One particle: the firmware's Particle class with a RAM EEPROM and a simulated ADC.
 
     Time is whatever the caller says: tick(now_ms) advances the logic to now_ms, drawing ADC
@@ -204,17 +203,6 @@ class NativeParticle:
         if self._handle is not None:
             self._lib.pb_particle_free(self._handle)
             self._handle = None
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     def __del__(self) -> None:
         # Only when the interpreter is not tearing the module down already.

@@ -14,11 +14,11 @@ import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Any, Self
+from typing import Any
 
 import numpy as np
 
+from particlebot.closing import ClosedOnExit
 from particlebot.logs.world import bodies_record, radii_record, scene_record
 from particlebot.protocol import UNASSIGNED_ID, DecodeStats, Frame, StreamDecoder
 from particlebot.sim.air.medium import BASE, NOISE, Medium, Reception
@@ -83,7 +83,7 @@ class FirmwareRadii(Controller):
         out[:] = self.radii
 
 
-class SimSwarm(Paced):
+class SimSwarm(Paced, ClosedOnExit):
     """Particles running our firmware in the world of a scenario, on one 802.15.4 air.
 
     The scenario places the robot's particles (indices 0..K-1, ids first_id..), the lamp and the
@@ -446,17 +446,6 @@ class SimSwarm(Paced):
     def close(self) -> None:
         self.stop()
         self.particles.close()
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 def _particles(config: SwarmConfig, ids: list[int], factory: ParticleFactory) -> FirmwareParticles:

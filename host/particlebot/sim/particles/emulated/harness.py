@@ -14,9 +14,9 @@ import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import IO, Self
+from typing import IO
 
+from particlebot.closing import ClosedOnExit
 from particlebot.sim.clock import CPU_HZ
 
 SENSOR_COUNT = 6
@@ -88,7 +88,7 @@ class HarnessError(RuntimeError):
     """The harness process refused a command, died, or said something unexpected."""
 
 
-class ParticleSim:
+class ParticleSim(ClosedOnExit):
     """A particle_sim process running one firmware image; collects what the firmware does.
 
     uart, servo_pulses and resets grow as simulated time passes; forget() drops what was kept.
@@ -258,17 +258,6 @@ class ParticleSim:
         if self._eeprom_file is not None:
             self._eeprom_file.unlink(missing_ok=True)
             self._eeprom_file = None
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     # ---- plumbing ----------------------------------------------------------------------------
 

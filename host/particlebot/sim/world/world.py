@@ -371,6 +371,31 @@ class World:
             done = 1
         return min(done, rows)
 
+    def place(self, index: int, x: float, y: float) -> None:
+        """Puts particle `index` at (x, y) at rest, as a hand puts it down (calibration moves
+        simulated particles this way). ValueError, and nothing moved, for a place outside the
+        walls or inside an obstacle; overlapping other particles is the caller's business (the
+        contact forces push them apart on the next step)."""
+        if not 0 <= index < self.count:
+            raise ValueError(f"no particle {index} (0..{self.count - 1})")
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError("a particle's place must be finite")
+        slot = int(self._internal_slots(np.array([index]))[0])
+        radius = float(self._body[k.B_R, slot])
+        limit = self.params.half_width - radius
+        if abs(x) > limit or abs(y) > limit:
+            raise ValueError(f"particles must lie inside the walls at +-{self.params.half_width} m")
+        if self.arena.overlapping(np.array([x]), np.array([y]), np.array([radius]))[0]:
+            raise ValueError(f"({x:.3f}, {y:.3f}) cuts into an obstacle")
+        self._pos[:, slot] = (x, y)
+        self._vel[:, slot] = 0.0
+        self._vel_old[:, slot] = 0.0
+        self._nbr = k.build_lists(
+            self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
+            self._nbr, self._ncount, self._bounds, self._prm, True,
+        )  # fmt: skip
+        self._view.invalidate()
+
     def _dead_step(self) -> int:
         return math.ceil(self.dead.at_s / self.params.dt - 1e-9)
 

@@ -97,3 +97,17 @@ def test_a_stale_grid_run_resumes_from_a_snapshot_bit_for_bit(tmp_path: Path) ->
 def test_a_sort_interval_below_one_step_is_refused(interval: float) -> None:
     with pytest.raises(ValueError, match="sort_interval"):
         PhysicsParams(sort_interval=interval)
+
+
+def test_a_particle_put_down_by_hand_is_listed_where_it_lies() -> None:
+    # place() re-orders the particles: the stale listing must follow them, and list the moved
+    # one where it now lies, so that a disc put down touching another is pushed away at once.
+    x = np.array([0.0, 3.0, 6.0])
+    world = World(x, np.zeros(3), controller=Command(),
+                  params=PhysicsParams(neighbour_search=STALE))  # fmt: skip
+    world.step(1)
+    world.place(2, 2 * R_MIN - 0.008, 0.0)  # 8 mm into particle 0: 8 N beats static friction
+    world.step(1)
+    vx = world.state().vx
+    assert vx[2] > 0.0 and vx[0] < 0.0
+    assert vx[1] == 0.0

@@ -394,6 +394,12 @@ class World:
             self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
             self._nbr, self._ncount, self._bounds, self._prm, True,
         )  # fmt: skip
+        if self._stale:
+            # The rebuild re-ordered the particles the listing refers to: list them again.
+            k.stale_list(
+                self._pos, -self.params.half_width, 2 * self.params.r_max, self._stale_hashes,
+                self._stale_members, self._stale_start,
+            )  # fmt: skip
         self._view.invalidate()
 
     def _dead_step(self) -> int:

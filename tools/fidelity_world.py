@@ -242,8 +242,7 @@ def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
     names = list(results)
     for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
         paper = TABLE_S3_MM_S[n][0.0]
-        ax.axvspan(paper.mean - paper.sd, paper.mean + paper.sd, color="gold", alpha=0.35,
-                   label=f"paper: {paper.mean:.2f} ± {paper.sd:.2f} mm/s")  # fmt: skip
+        ax.axvspan(paper.mean - paper.sd, paper.mean + paper.sd, color="gold", alpha=0.35)
         ax.axvline(paper.mean, color="goldenrod")
         for row, name in enumerate(names):
             speeds = np.array(results[name].get(n, []))
@@ -257,8 +256,9 @@ def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
         ax.set_yticks(range(len(names)), names[::-1])
         ax.axvline(0.0, color="grey", lw=0.8)
         ax.set_xlabel("speed toward the light, 30 min - 2 h (mm/s)")
-        ax.set_title(f"{n} particles, 0 % dead: {len(results[names[0]].get(n, []))} seeds")
-        ax.legend(loc="lower right", fontsize=8)
+        seeds = len(results[names[0]].get(n, []))
+        ax.set_title(f"{n} particles, 0 % dead, {seeds} seeds\n"
+                     f"gold: the paper's {paper.mean:.2f} ± {paper.sd:.2f} mm/s")  # fmt: skip
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -80,6 +80,10 @@ VARIANTS = [
         physics={"static_factor": 1.0},
         controller={"phase_noise": 0.0},
     ),
+    *(
+        Variant(f"attraction {times}x (fitted A)", physics={"attraction": times * 1.5884e-5})
+        for times in (2, 4, 6)
+    ),
 ]
 LIGHT_FACT = {11: 16.0, 101: 8.0, 1001: 4.0, 10001: 2.0}
 """The published main's lamp distance in DPD by swarm size (up to the key): lamp_dpd -1."""

@@ -25,7 +25,8 @@ class NeighbourSearch(Enum):
     every sort_interval; each step a particle meets every particle LISTED in the 5 x 5 cells
     around its CURRENT cell, so a pair goes unseen from one side once the other has drifted two
     cells from where it was listed, until the next sort. One-sided, as published: i can feel j
-    while j does not feel i."""
+    while j does not feel i. Serial; passive objects still meet every particle directly;
+    `World.rebuilds` counts the listings."""
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,8 @@ ROOT = Path(__file__).resolve().parent.parent
 BENCHMARKS: list[tuple[str, list[str]]] = [
     ("Firmware image size against the budget", ["make", "-s", "firmware"]),
     ("Host protocol decoder", [sys.executable, "tools/bench_decoder.py"]),
-    ("Host receive path and virtual swarm", [sys.executable, "tools/bench_host.py"]),
+    ("Host receive path", [sys.executable, "tools/bench_host.py"]),
+    ("Simulated swarms in the world", [sys.executable, "tools/bench_world_swarms.py"]),
     ("Vectorised firmware controller", [sys.executable, "tools/bench_firmware_controller.py"]),
     ("STOP right after a base-station restart", [sys.executable, "tools/bench_stop_restart.py"]),
     ("Swarm placement (SI Algorithm 5)", [sys.executable, "tools/bench_placement.py"]),

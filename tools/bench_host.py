@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Measures the host receive path (decode, console model, log) and the virtual swarm speed-up."""
+"""Measures the host receive path (decode, console model, log); the simulated swarms' speed is
+tools/bench_world_swarms.py's."""
 
 from __future__ import annotations
 
@@ -13,11 +14,10 @@ from pathlib import Path
 from typing import Self
 
 from particlebot.logs.jsonl import JsonlWriter
-from particlebot.protocol import DEFINITION_HASH, Method, Start, Status, encode_frame
+from particlebot.protocol import DEFINITION_HASH, Status, encode_frame
 from particlebot.radio import Packet, Radio, RadioUrl
 from particlebot.session import Listener, ReceivedFrame, Session
 from particlebot.swarm.tracker import SwarmTracker
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 LINK_BYTES_PER_S = 9600 / 10  # 8N1
 STATUS_FRAME_BYTES = Status.PAYLOAD_SIZE + 8
@@ -88,19 +88,6 @@ def receive_path(count: int, log_dir: Path) -> float:
     return count / (counter.done_at - start)
 
 
-def swarm_speedup(particles: int, seconds: float, kinematics: bool) -> float:
-    """Simulated seconds per wall second for a running swarm (START sent, method D)."""
-    swarm = VirtualSwarm(SwarmConfig(count=particles, kinematics=kinematics))
-    start_message = Start(
-        run_id=1, method=int(Method.COUNTING), cycle_steps=150, wave_size=0,
-        update_interval_s=0, phototaxis=0,
-    )  # fmt: skip
-    swarm.send_from_base(encode_frame(start_message, 0, 0))
-    began = time.perf_counter()
-    swarm.run_for(seconds)
-    return seconds / (time.perf_counter() - began)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--frames", type=int, default=20000)
@@ -115,13 +102,6 @@ def main() -> None:
         f"{rate:,.0f} STATUS frames/s; a 9600-baud link carries at most {ceiling:.1f} "
         f"({rate / ceiling:,.0f}x headroom)"
     )
-    for particles in (10, 50):
-        for kinematics in (True, False):
-            speedup = swarm_speedup(particles, 30.0, kinematics)
-            print(
-                f"virtual swarm, {particles} particles, kinematics "
-                f"{'on' if kinematics else 'off'}: {speedup:.0f}x real time"
-            )
 
 
 if __name__ == "__main__":

@@ -35,19 +35,22 @@ from particlebot.protocol import (
     Start,
     encode_frame,
 )
-from particlebot.sim import CPU_HZ, BaseStation, EmulatedSwarm, ServoPulse, SwarmConfig
-from particlebot.sim.medium import BASE, NOISE
-from particlebot.sim.servo import (
-    STEP_S,
+from particlebot.sim.air.medium import BASE, NOISE
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.particles.emulated.harness import ServoPulse
+from particlebot.sim.particles.emulated.servo import (
     contracted_width,
     cycle_profile_us,
     cycle_starts,
     missed_frames,
     period_errors_us,
+    servo_step_s,
 )
-from particlebot.sim.swarm import packet_frames
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import BaseStation, packet_frames
 
 CYCLE_STEPS = 75
+STEP_S = servo_step_s()  # one servo step, as the firmware defines it
 CYCLE_T_S = CYCLE_STEPS * STEP_S
 INTENSITY_FRAME_BYTES = 8 + Intensity.PAYLOAD_SIZE  # 14: the frame overhead and 6 payload bytes
 REPEATS = PARAM_SPECS[Param.BROADCAST_REPEATS].default
@@ -76,7 +79,7 @@ def emulation_speed(count: int, seconds: float, running: bool) -> float:
     """Emulated seconds per wall second for `count` particles over `seconds` of emulated time
     (after boot), idle (periodic STATUS only) or running a method-D wave."""
     params = {Param.ROUND_MS: 1000}
-    with EmulatedSwarm(SwarmConfig(count=count, params=params)) as swarm:
+    with SimSwarm(SwarmConfig(level=Level.EMULATED, count=count, params=params)) as swarm:
         base = BaseStation(swarm)
         swarm.run_for(0.5)
         if running:
@@ -151,10 +154,12 @@ def servo_timing(seconds: float) -> dict[str, float]:
     brings five 54-byte STATUS frames onto the air) and noise takes ~25 % of the channel's
     serial capacity; every particle keeps sampling its photocells throughout."""
     rng = random.Random(5)
-    with EmulatedSwarm(SwarmConfig(count=5, params={Param.ROUND_MS: 1000})) as swarm:
+    with SimSwarm(
+        SwarmConfig(level=Level.EMULATED, count=5, params={Param.ROUND_MS: 1000})
+    ) as swarm:
         base = BaseStation(swarm)
         swarm.run_for(0.5)
-        resting = [contracted_width(sim.servo_pulses[-20:]) for sim in swarm.sims]
+        resting = [contracted_width(sim.servo_pulses[-20:]) for sim in swarm.emulated.sims]
         base.send(start_message(1))
         swarm.run_for(1.1)
         measure_from = swarm.time_s
@@ -172,7 +177,7 @@ def servo_timing(seconds: float) -> dict[str, float]:
         # The logic's arithmetic is eq. 4 through the calibration table (to the microsecond).
         profile = cycle_profile_us(CYCLE_STEPS)
         assert all(abs(c - p) <= 1 for c, p in zip(commanded, profile, strict=True))
-        for sim, contracted in zip(swarm.sims, resting, strict=True):
+        for sim, contracted in zip(swarm.emulated.sims, resting, strict=True):
             pulses = [p for p in sim.servo_pulses if p.start_s >= measure_from]
             periods += [abs(e) for e in period_errors_us(pulses)]
             missed += missed_frames(pulses)
@@ -211,7 +216,9 @@ def round_duration(count: int, round_ms: int) -> dict[str, float | int | bool]:
     """One method-D round of `count` particles in a line (0.155 m apart, the nearest 0.10 m
     from the lamp's foot): START from the base station to the last INTENSITY of the round
     delivered to every particle."""
-    with EmulatedSwarm(SwarmConfig(count=count, params={Param.ROUND_MS: round_ms})) as swarm:
+    with SimSwarm(
+        SwarmConfig(level=Level.EMULATED, count=count, params={Param.ROUND_MS: round_ms})
+    ) as swarm:
         base = BaseStation(swarm)
         swarm.run_for(0.5)
         wall = time.perf_counter()
@@ -222,7 +229,7 @@ def round_duration(count: int, round_ms: int) -> dict[str, float | int | bool]:
         last_delivery = 0
         copies = dropped = 0
         heard: dict[int, dict[int, int]] = {i: {} for i in range(count)}
-        for copy in swarm.medium.receptions:
+        for copy in swarm.air.receptions:
             if copy.packet.source in (BASE, NOISE) or copy.receiver == BASE:
                 continue
             frames = [f for f in packet_frames(copy.packet) if isinstance(f.message, Intensity)]

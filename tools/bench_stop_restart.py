@@ -18,17 +18,16 @@ import time
 from particlebot import Swarm
 from particlebot.firmware.native import NativeParticle
 from particlebot.protocol import State
-from particlebot.radio.virtual import VirtualRadio, lose_on_air
+from particlebot.radio.virtual import VirtualRadio
+from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.roster import STOPPED_STATES
 from particlebot.swarm.tracker import STOP_GRACE_S
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 
-def still_moving(world: VirtualSwarm) -> int:
+def still_moving(world: SimSwarm) -> int:
     """Particles whose logic is not stopped, whatever the radio said."""
     moving = 0
-    for member in world.members:
-        firmware = member.firmware
+    for firmware in world.native.firmware:
         assert isinstance(firmware, NativeParticle)
         moving += State(firmware.status().state) not in STOPPED_STATES
     return moving
@@ -36,8 +35,7 @@ def still_moving(world: VirtualSwarm) -> int:
 
 def restart_and_stop(seed: int, count: int, loss: float, grace: float) -> tuple[bool, int, float]:
     """(called confirmed, particles still moving, seconds to the verdict) for one seed."""
-    world = VirtualSwarm(SwarmConfig(count=count, seed=seed, kinematics=False))
-    lose_on_air(world, loss, seed)
+    world = SimSwarm(SwarmConfig(count=count, seed=seed, loss=loss, kinematics=False))
     with Swarm(VirtualRadio(world, url="virtual://"), log_dir=None) as first:
         first.wait_for(count=count, timeout=60)
         first.send_start("D", cycle_steps=75)

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Measures the world's fidelity to the paper: speed toward the light (Table S3, 0 % dead) with the
-published controller, beside what each suspect of a difference changes; plots it."""
+published controller, beside what each suspect of a difference changes (the published code's stale
+neighbour search among them) and how the speed is measured; plots it."""
 
 from __future__ import annotations
 
@@ -22,11 +23,15 @@ from particlebot.sim.particles.model.firmware import FirmwareController, Firmwar
 from particlebot.sim.particles.model.published import PublishedController, PublishedSettings
 from particlebot.sim.scenarios.placement import algorithm5
 from particlebot.sim.world import Lamp, PhysicsParams, World
+from particlebot.sim.world.params import NeighbourSearch
 from particlebot.studies.definitions import FAR_LAMP_M
 from particlebot.studies.packing import densest_packing_diameter_m
-from particlebot.studies.published import TABLE_S3_MM_S
+from particlebot.studies.published import TABLE_S3_MM_S, speed_to_percent_diameter_per_cycle
 
 R_MIN = PhysicsParams().r_min
+SAMPLE_S = 60.0
+"""The centroid's distance to the light is sampled this often (the published CSV's interval)."""
+STALE = NeighbourSearch.PUBLISHED_STALE_GRID
 
 
 @dataclass(frozen=True)
@@ -55,7 +60,33 @@ VARIANTS = [
     Variant("float32", precision="float32"),
     Variant("the published code's placement", placement="published-code"),
     Variant("lamp at 3.5 DPD (published main)", lamp_dpd=3.5),
+    Variant("published stale grid (magnets cut at 1 cm)", physics={"neighbour_search": STALE}),
+    Variant(
+        "published stale grid, magnets uncut (the published search)",
+        physics={"neighbour_search": STALE, "magnet_cutoff": 1.0},
+    ),
+    Variant(
+        "published search, code's placement, lamp 16/8 DPD",
+        physics={"neighbour_search": STALE, "magnet_cutoff": 1.0},
+        placement="published-code",
+        lamp_dpd=-1.0,
+    ),
+    Variant(
+        "published search, re-listed every 30 min (staler)",
+        physics={"neighbour_search": STALE, "magnet_cutoff": 1.0, "sort_interval": 1800.0},
+    ),
+    Variant(
+        "static friction 1x mu g and no phase noise",
+        physics={"static_factor": 1.0},
+        controller={"phase_noise": 0.0},
+    ),
+    *(
+        Variant(f"attraction {times}x (fitted A)", physics={"attraction": times * 1.5884e-5})
+        for times in (2, 4, 6)
+    ),
 ]
+LIGHT_FACT = {11: 16.0, 101: 8.0, 1001: 4.0, 10001: 2.0}
+"""The published main's lamp distance in DPD by swarm size (up to the key): lamp_dpd -1."""
 
 
 def published_code_placement(count: int, rng: np.random.Generator) -> np.ndarray:
@@ -92,25 +123,54 @@ def published_code_placement(count: int, rng: np.random.Generator) -> np.ndarray
     return np.array(placed)
 
 
-def speed_run(variant: Variant, count: int, seed: int, duration: float, skip: float) -> float:
-    """Speed toward the light (mm/s) from `skip` to `duration` of one run."""
+def lamp_dpd(variant: Variant, count: int) -> float | None:
+    """The variant's lamp distance in DPD for this size (-1: the published main's table)."""
+    if variant.lamp_dpd is not None and variant.lamp_dpd < 0:
+        return next(f for most, f in sorted(LIGHT_FACT.items()) if count <= most)
+    return variant.lamp_dpd
+
+
+def speed_run(variant: Variant, count: int, seed: int, duration: float) -> np.ndarray:
+    """The centroid's distance to the light (m) every SAMPLE_S from 0 to `duration` of one run."""
     rng = np.random.default_rng(seed)
     if variant.placement == "published-code":
         xy = published_code_placement(count, rng)
     else:
         xy = algorithm5(count, R_MIN, rng).xy
     dpd = densest_packing_diameter_m(count)
-    lamp_x = -(variant.lamp_dpd * dpd if variant.lamp_dpd is not None else dpd / 2 + FAR_LAMP_M)
+    factor = lamp_dpd(variant, count)
+    lamp_x = -(factor * dpd if factor is not None else dpd / 2 + FAR_LAMP_M)
     world = World(
         xy[:, 0], xy[:, 1],
         controller=PublishedController(PublishedSettings(**variant.controller)),
         params=PhysicsParams(**variant.physics), lamp=Lamp(lamp_x, 0.0), seed=seed,
         precision=variant.precision,  # type: ignore[arg-type]
     )  # fmt: skip
-    world.run(skip)
-    start = world.light_distance()
-    world.run(duration - skip)
-    return (start - world.light_distance()) / (duration - skip) * 1000.0
+    track = [world.light_distance()]
+    for _ in range(round(duration / SAMPLE_S)):
+        world.run(SAMPLE_S)
+        track.append(world.light_distance())
+    return np.array(track)
+
+
+MEASURES = ("ends, skip-end", "fit, skip-end", "ends, 0-end", "ends, 0-skip")
+"""Ways of turning a distance track into a speed (mm/s): the change between two samples over
+the time between them (from `skip` to the end: ours and the SI's words; the whole run; only
+the part left out), or the slope of a least-squares line through the samples from skip on."""
+
+
+def speeds(track: np.ndarray, skip: float) -> dict[str, float]:
+    """Every measure of MEASURES for one track (toward the light is positive)."""
+    first = round(skip / SAMPLE_S)
+    t = np.arange(track.size) * SAMPLE_S
+    end = t[-1]
+    slope = np.polyfit(t[first:], track[first:], 1)[0]
+    return {
+        MEASURES[0]: (track[first] - track[-1]) / (end - skip) * 1000.0,
+        MEASURES[1]: -slope * 1000.0,
+        MEASURES[2]: (track[0] - track[-1]) / end * 1000.0,
+        MEASURES[3]: (track[0] - track[first]) / skip * 1000.0 if skip > 0 else math.nan,
+    }
 
 
 def firmware_line(seconds: float) -> dict[str, float]:
@@ -186,8 +246,7 @@ def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
     names = list(results)
     for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
         paper = TABLE_S3_MM_S[n][0.0]
-        ax.axvspan(paper.mean - paper.sd, paper.mean + paper.sd, color="gold", alpha=0.35,
-                   label=f"paper: {paper.mean:.2f} ± {paper.sd:.2f} mm/s")  # fmt: skip
+        ax.axvspan(paper.mean - paper.sd, paper.mean + paper.sd, color="gold", alpha=0.35)
         ax.axvline(paper.mean, color="goldenrod")
         for row, name in enumerate(names):
             speeds = np.array(results[name].get(n, []))
@@ -201,8 +260,9 @@ def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
         ax.set_yticks(range(len(names)), names[::-1])
         ax.axvline(0.0, color="grey", lw=0.8)
         ax.set_xlabel("speed toward the light, 30 min - 2 h (mm/s)")
-        ax.set_title(f"{n} particles, 0 % dead: {len(results[names[0]].get(n, []))} seeds")
-        ax.legend(loc="lower right", fontsize=8)
+        seeds = len(results[names[0]].get(n, []))
+        ax.set_title(f"{n} particles, 0 % dead, {seeds} seeds\n"
+                     f"gold: the paper's {paper.mean:.2f} ± {paper.sd:.2f} mm/s")  # fmt: skip
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -217,36 +277,58 @@ def main() -> int:
     parser.add_argument("--variants", type=int, nargs="*", help="indices into the list (all)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", type=Path, default=Path("docs/world"), help="figure and JSON")
+    parser.add_argument("--speeds-only", action="store_true",
+                        help="no firmware line, no boiling figure (they take minutes)")  # fmt: skip
     args = parser.parse_args()
     if not 0 <= args.skip < args.duration or args.seeds < 2:
         parser.error("need 0 <= --skip < --duration and at least 2 seeds")
+    if args.duration % SAMPLE_S or args.skip % SAMPLE_S:
+        parser.error(f"--duration and --skip must be multiples of {SAMPLE_S:g} s")
+    if args.variants and not all(0 <= i < len(VARIANTS) for i in args.variants):
+        parser.error(f"--variants are indices 0 to {len(VARIANTS) - 1}")
     chosen = [VARIANTS[i] for i in args.variants] if args.variants else VARIANTS
     jobs = [(v, n, s) for n in args.sizes for v in chosen for s in range(args.seeds)]
     print(f"{len(jobs)} runs on {args.workers} processes; load {os.getloadavg()[0]:.1f}")
     began = time.perf_counter()
     results: dict[str, dict[int, list[float]]] = {v.name: {} for v in chosen}
+    measured: dict[str, dict[int, dict[str, list[float]]]] = {v.name: {} for v in chosen}
     with ProcessPoolExecutor(args.workers) as pool:
-        futures = [pool.submit(speed_run, v, n, s, args.duration, args.skip) for v, n, s in jobs]
+        futures = [pool.submit(speed_run, v, n, s, args.duration) for v, n, s in jobs]
         for done, ((v, n, _), future) in enumerate(zip(jobs, futures, strict=True), start=1):
-            results[v.name].setdefault(n, []).append(future.result())
+            by_measure = speeds(future.result(), args.skip)
+            results[v.name].setdefault(n, []).append(by_measure[MEASURES[0]])
+            for name, value in by_measure.items():
+                measured[v.name].setdefault(n, {}).setdefault(name, []).append(value)
             print(f"\r{done}/{len(jobs)} runs, {time.perf_counter() - began:.0f} s", end="",
                   file=sys.stderr, flush=True)  # fmt: skip
     print(file=sys.stderr)
     for n in args.sizes:
         paper = TABLE_S3_MM_S[n][0.0]
         print(f"\n{n} particles (paper {paper.mean:.2f} ± {paper.sd:.2f} mm/s)")
+        print(f"  {'':<58} " + "  ".join(f"{m:>15}" for m in MEASURES))
         for v in chosen:
             s = np.array(results[v.name][n])
-            inside = "inside" if abs(s.mean() - paper.mean) <= paper.sd else "outside"
-            print(f"  {v.name:<46} {s.mean():6.3f} ± {s.std(ddof=1):5.3f} mm/s ({inside})")
+            inside = "in" if abs(s.mean() - paper.mean) <= paper.sd else "out"
+            cells = "  ".join(
+                f"{np.mean(x):6.3f} ± {np.std(x, ddof=1):5.3f}"
+                for x in measured[v.name][n].values()
+            )
+            percent = speed_to_percent_diameter_per_cycle(float(s.mean()))
+            print(f"  {v.name:<58} {cells}  ({inside}; {percent:.2f} %Dmin/cycle)")
+    (args.out).mkdir(parents=True, exist_ok=True)
+    summary = {"duration_s": args.duration, "skip_s": args.skip, "speeds_mm_s": results,
+               "measures_mm_s": measured, "load": os.getloadavg()[0]}  # fmt: skip
+    if args.speeds_only:
+        (args.out / "fidelity.json").write_text(json.dumps(summary, indent=1))
+        plot(results, args.out / "fidelity.png")
+        print(f"wrote fidelity.json and fidelity.png into {args.out}")
+        return 0
     line = firmware_line(300.0)
     print("\nfirmware controller, line of 5, 5 min: " +
           ", ".join(f"{m} {mm:.0f} mm" for m, mm in line.items()) + " toward the lamp")  # fmt: skip
-    args.out.mkdir(parents=True, exist_ok=True)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "fidelity.json").write_text(json.dumps(
-        {"duration_s": args.duration, "skip_s": args.skip, "speeds_mm_s": results,
-         "firmware_line_mm": line}, indent=1))  # fmt: skip
+    (args.out / "fidelity.json").write_text(
+        json.dumps({**summary, "firmware_line_mm": line}, indent=1)
+    )
     plot(results, args.out / "fidelity.png")
     boil = boiling(args.out / "boiling.png")
     for label, figures in boil.items():

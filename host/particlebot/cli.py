@@ -22,7 +22,7 @@ COMMANDS: dict[str, str] = {
     "console": "live table of every particle, with commands",
     "log": "record a radio to a log without the console",
     "run": "run an experiment file's trials",
-    "demo": "a virtual swarm at a lamp: START (method D), STOP",
+    "demo": "a blob of virtual particles finds a lamp in 2-D (phototaxis), measured as Table S2",
     # session logs
     "export": "write a log's frames as CSV",
     "plot": "draw a log as a PNG: radius, state, intensity",

@@ -1,7 +1,10 @@
-"""Session plots: a log's STATUS frames as per-particle radius, state and intensity over time."""
+"""Session plots: a log's STATUS frames as per-particle radius, state and intensity over time; for a
+simulated radio also the world's truth: the commanded radius without aliasing, and a top view of
+every particle's path and the centroid's track toward the lamp."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import statistics
@@ -18,6 +21,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
+from particlebot.logs.world import WorldRecordError, WorldTrack, read_world
 from particlebot.protocol import Method, State
 from particlebot.resets import reset_cause, restarted
 
@@ -139,6 +143,9 @@ class SessionSeries:
     """The time axis shows start..end (seconds since the session started): the whole session,
     or the run or window asked for."""
     end: float | None = None
+    world: WorldTrack | None = None
+    """A simulated radio's truth, times in seconds since the session started (None: a real
+    radio, or a log from before the world was logged)."""
 
     @property
     def shown_end(self) -> float:
@@ -257,6 +264,14 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
             _add_command(commands, record, t - t0)
     if malformed:
         notes.append(f"{malformed} STATUS records without usable fields; skipped")
+    world: WorldTrack | None = None
+    try:
+        world = read_world(r for _, r in timed)
+    except WorldRecordError as exc:
+        notes.append(f"the world's records are damaged ({exc}); drawn without them")
+    if world is not None:
+        world.body_t = world.body_t - t0
+        world.radius_t = world.radius_t - t0
     if not series:
         raise PlotInputError("the log holds no STATUS frames: nothing to plot")
     ordered = sorted(
@@ -270,6 +285,7 @@ def extract(records: Sequence[Record], warnings: Iterable[str] = ()) -> SessionS
         radio=str(session.get("radio", "")),
         started=str(session.get("started", "")),
         warnings=notes,
+        world=world,
     )
 
 
@@ -329,6 +345,21 @@ def select(session: SessionSeries, start: float | None, end: float | None) -> Se
         warnings=session.warnings,
         start=low,
         end=high,
+        world=None if session.world is None else _world_window(session.world, low, high),
+    )
+
+
+def _world_window(world: WorldTrack, low: float, high: float) -> WorldTrack:
+    bodies = (world.body_t >= low) & (world.body_t <= high)
+    radii = (world.radius_t >= low) & (world.radius_t <= high)
+    return dataclasses.replace(
+        world,
+        body_t=world.body_t[bodies],
+        x=world.x[bodies],
+        y=world.y[bodies],
+        r=world.r[bodies],
+        radius_t=world.radius_t[radii],
+        commanded=world.commanded[radii],
     )
 
 
@@ -431,42 +462,67 @@ def _particle_colours(count: int) -> list[Any]:
     return [ramp(0.9 * index / max(1, count - 1)) for index in range(count)]
 
 
+TOP_VIEW_WIDTH = 7.0
+"""Inches of the top view beside the time panels, when the log holds the world's truth."""
+
+
 def render(session: SessionSeries, title: str) -> Figure:
-    """The session as a figure: radius, state timeline and intensity on one time axis."""
+    """The session as a figure: radius, state timeline and intensity on one time axis, and, when
+    the log holds the world's truth, a top view of the particles' paths beside them."""
     count = len(session.particles)
+    world = session.world if session.world is not None and len(session.world.body_t) else None
+    truth_radii = world is not None and len(world.radius_t) > 1
     # Heights in inches grow with the swarm: the state panel needs a readable row per particle and
     # the radius panel room for a legend line per particle beside it.
     radius_height = max(3.0, 0.18 * count + 0.6)
     state_height = max(1.6, 0.28 * count)
     intensity_height = 2.2
+    height = radius_height + state_height + intensity_height + 1.4
     figure = Figure(
-        figsize=(13, radius_height + state_height + intensity_height + 1.4),
+        figsize=(13 + (TOP_VIEW_WIDTH if world is not None else 0), height),
         dpi=100,
         layout="constrained",
     )
     FigureCanvasAgg(figure)
-    radius_ax, state_ax, intensity_ax = figure.subplots(
+    panels: Any = figure
+    if world is not None:
+        halves: Any = figure.subfigures(1, 2, width_ratios=[13, TOP_VIEW_WIDTH])
+        panels, top = halves[0], halves[1]
+    radius_ax, state_ax, intensity_ax = panels.subplots(
         3, 1, sharex=True, height_ratios=[radius_height, state_height, intensity_height]
     )
     colours = _particle_colours(count)
     period = statistics.median(p.sample_period() for p in session.particles)
+    sampled = "intensity is" if truth_radii else "radius and intensity are"
     figure.suptitle(
-        f"{title}\nradius and intensity are sampled at STATUS times (about every {period:.1f} s "
-        "per particle): lines join samples, they do not trace the motion in between",
+        f"{title}\n{sampled} sampled at STATUS times (about every {period:.1f} s per particle): "
+        "lines join samples, they do not trace the motion in between",
         fontsize=11,
     )
 
+    colour_of = {p.particle_id: c for p, c in zip(session.particles, colours, strict=True)}
     handles: dict[int, Any] = {}
+    if world is not None and truth_radii:
+        for column, particle_id in enumerate(world.ids):
+            particle = next((p for p in session.particles if p.particle_id == particle_id), None)
+            (handles[particle_id],) = radius_ax.plot(
+                world.radius_t,
+                world.commanded[:, column] * 1000,
+                linewidth=0.9,
+                color=colour_of.get(particle_id, "#999999"),
+                label=particle.label if particle is not None else f"id {particle_id}",
+            )
     for colour, particle in zip(colours, session.particles, strict=True):
-        (handles[particle.particle_id],) = radius_ax.plot(
-            particle.times,
-            particle.radius_mm,
-            marker="o",
-            markersize=3,
-            linewidth=1.0,
-            color=colour,
-            label=particle.label,
-        )
+        if not truth_radii:
+            (handles[particle.particle_id],) = radius_ax.plot(
+                particle.times,
+                particle.radius_mm,
+                marker="o",
+                markersize=3,
+                linewidth=1.0,
+                color=colour,
+                label=particle.label,
+            )
         intensity_ax.plot(
             particle.times,
             particle.intensity,
@@ -476,7 +532,11 @@ def render(session: SessionSeries, title: str) -> Figure:
             color=colour,
         )
     radius_ax.set_ylabel("commanded radius (mm)")
-    radius_ax.set_title("commanded radius per particle, from STATUS radius_um", fontsize=10)
+    radius_ax.set_title(
+        "commanded radius per particle, "
+        + ("the simulation's truth every 0.1 s" if truth_radii else "from STATUS radius_um"),
+        fontsize=10,
+    )
     radius_ax.grid(True, alpha=0.3)
     # Rows of the state panel follow the wave (S_n); the legend is where a person looks an id up.
     radius_ax.legend(
@@ -581,7 +641,68 @@ def render(session: SessionSeries, title: str) -> Figure:
             ha="right" if right_side else "left",
             bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0},
         )
+    if world is not None:
+        draw_top_view(top.subplots(), world, colour_of)
     return figure
+
+
+def draw_top_view(ax: Any, world: WorldTrack, colour_of: dict[int, Any]) -> None:
+    """The floor from above: obstacles, the lamp, each particle's path (its start drawn as an
+    outline, its end as a disc of its radius then) and the centroid's track."""
+    from matplotlib.patches import Circle as Disc
+    from matplotlib.patches import Rectangle
+
+    for x_min, x_max, y_min, y_max in world.rects:
+        ax.add_patch(
+            Rectangle((x_min, y_min), x_max - x_min, y_max - y_min, color="#777777", zorder=1)
+        )
+    for circle_x, circle_y, radius in world.circles:
+        ax.add_patch(Disc((circle_x, circle_y), radius, color="#777777", zorder=1))
+    for ox, oy, radius in world.objects:
+        ax.add_patch(Disc((ox, oy), radius, facecolor="#d9c7a3", edgecolor="#8c6d3f", zorder=2))
+    for column, particle_id in enumerate(world.ids):
+        colour = colour_of.get(particle_id, "#999999")
+        xs, ys = world.x[:, column], world.y[:, column]
+        ax.plot(xs, ys, color=colour, linewidth=0.7, alpha=0.8, zorder=3)
+        ax.add_patch(
+            Disc((xs[0], ys[0]), world.r[0, column], fill=False, edgecolor=colour, alpha=0.5,
+                 linestyle="--", linewidth=0.8, zorder=3)
+        )  # fmt: skip
+        ax.add_patch(
+            Disc((xs[-1], ys[-1]), world.r[-1, column], facecolor=colour, alpha=0.55,
+                 edgecolor=colour, zorder=4)
+        )  # fmt: skip
+    cx, cy = world.centroid
+    ax.plot(cx, cy, color="black", linewidth=2.0, zorder=5, label="centroid")
+    ax.plot([cx[0]], [cy[0]], marker="o", color="black", markersize=5, zorder=6)
+    ax.plot([cx[-1]], [cy[-1]], marker="s", color="black", markersize=5, zorder=6)
+    lamp_x, lamp_y, lamp_h = world.lamp
+    ax.plot(
+        [lamp_x], [lamp_y], marker="*", markersize=18, color="#f2b705",
+        markeredgecolor="#8a6500", zorder=7, linestyle="",
+        label=f"lamp ({lamp_h * 100:.0f} cm above the photocells)",
+    )  # fmt: skip
+    before = math.hypot(cx[0] - lamp_x, cy[0] - lamp_y)
+    after = math.hypot(cx[-1] - lamp_x, cy[-1] - lamp_y)
+    span = world.body_t[-1] - world.body_t[0]
+    ax.set_title(
+        f"top view (the simulation's truth): paths and centroid\n"
+        f"centroid {(before - after) * 100:+.1f} cm toward the lamp in {span:.0f} s "
+        f"({before:.2f} m -> {after:.2f} m)",
+        fontsize=10,
+    )
+    # The swarm, the lamp and the obstacles near them, with a margin of a particle or two.
+    xs_all = [float(world.x.min()), float(world.x.max()), lamp_x]
+    ys_all = [float(world.y.min()), float(world.y.max()), lamp_y]
+    margin = 2 * float(world.r.max())
+    ax.set_xlim(min(xs_all) - margin, max(xs_all) + margin)
+    ax.set_ylim(min(ys_all) - margin, max(ys_all) + margin)
+    # The floor's true proportions, in a panel as tall as they need.
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
 
 
 def plot_log(

@@ -119,7 +119,7 @@ def test_stats_errors_get_one_line(tmp_path: Path, capsys: pytest.CaptureFixture
     (tmp_path / "session.jsonl").write_text("{}\n")
     for argv, message in [
         (["stats", str(tmp_path / "nothing.csv")], "no such file"),
-        (["stats", str(tmp_path / "session.jsonl")], "session logs carry no positions"),
+        (["stats", str(tmp_path / "session.jsonl")], "no positions in this log"),
         (["stats", str(tmp_path), "--interval-s", "0"], "--interval-s must be positive"),
         (["stats", str(tmp_path), "--lamp", "1"], "--lamp must look like"),
     ]:

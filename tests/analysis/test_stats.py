@@ -20,6 +20,7 @@ from particlebot.analysis.sources import (
 )
 from particlebot.analysis.stats import EXPERIMENT_CYCLE_S, StatsSettings, analyse
 from particlebot.analysis.trackfile import TrackRow, write_track
+from particlebot.swarm.api import Swarm
 
 
 def series(
@@ -181,7 +182,7 @@ def test_sources_the_statistics_cannot_use_say_why(tmp_path: Path) -> None:
         load_source(tmp_path / "notes.csv")
     with pytest.raises(SourceError, match=r"holds no TRACK\.csv"):
         load_source(tmp_path)
-    with pytest.raises(SourceError, match="session logs carry no positions"):
+    with pytest.raises(SourceError, match="no positions in this log: only a simulated radio"):
         load_source(tmp_path / "session.jsonl")
     with pytest.raises(SourceError, match="no such file"):
         load_source(tmp_path / "missing.csv")
@@ -198,3 +199,26 @@ def test_the_default_cycle_is_the_sources_own_else_the_papers_experiments() -> N
     t, x, y, lamp = walk(0.0, 0.05, seconds=300)
     assert analyse(series(t, x, y, lamp), StatsSettings()).cycle_s == EXPERIMENT_CYCLE_S
     assert analyse(series(t, x, y, lamp), StatsSettings(cycle_s=12.0)).cycle_s == 12.0
+
+
+def test_a_simulated_radios_session_log_is_a_source_with_its_lamp_and_cycle(
+    tmp_path: Path,
+) -> None:
+    # Ten virtual particles (the firmware logic) in a blob 1.5 m from the lamp, method A: START,
+    # two minutes, STOP. The log records the world: positions at 2 Hz, commanded radii at 10 Hz.
+    with Swarm.open("virtual://10?speed=max&scenario=blob&seed=2", log_dir=tmp_path) as swarm:
+        swarm.wait_for(count=10, timeout=15)
+        swarm.start("A", cycle_steps=150)
+        swarm.sleep(120)
+        swarm.stop()
+        log = swarm.log_path
+    assert log is not None
+    (series,) = load_source(log)
+    assert series.kind == "log" and series.lamp_cm == (0.0, 0.0)
+    # Method A's wave is WAVE_SIZE (5) long: T + t_p = 3 s + 4 x 1.5 s.
+    assert series.cycle_s == pytest.approx(9.0, abs=0.05)
+    assert series.t_s[-1] - series.t_s[0] == pytest.approx(120, abs=2)  # START to STOP
+    result = analyse(series, StatsSettings())
+    assert result.steps == 4 and result.average_mm_s > 0  # toward the lamp
+    # In a folder, the log is found with whatever else lies there.
+    assert [s.name for s in load_source(tmp_path)] == [log.name]

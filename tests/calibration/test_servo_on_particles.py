@@ -46,7 +46,7 @@ def swarm() -> Iterator[Swarm]:
 
 def firmware(swarm: Swarm, particle_id: int = PARTICLE):  # type: ignore[no-untyped-def]
     world = swarm.radio.swarm  # type: ignore[attr-defined]
-    return next(m.firmware for m in world.members if m.firmware.id == particle_id)
+    return next(p for p in world.native.firmware if p.id == particle_id)
 
 
 def person(

@@ -131,6 +131,14 @@ def test_direct_estimation_with_the_papers_reference_counts_diameters_from_under
     assert reading_on_floor(0.0) == REF_VALUE and LAMP_HEIGHT_M == REF_DISTANCE_M
 
 
+def group_count(v_max: int, v_min: int, groups: int) -> int:
+    """N_w: GROUPS, or with GROUPS 0 the rows of the group toward the lamp: method A's S_n (eqs.
+    14-16, checked on its own above) of the weakest reading less that of the strongest, plus 1."""
+    if groups > 0:
+        return groups
+    return estimate(Method.DIRECT, v_min, []) - estimate(Method.DIRECT, v_max, []) + 1
+
+
 @settings(max_examples=300, deadline=None)
 @given(
     own=st.integers(0, 1023),
@@ -140,7 +148,7 @@ def test_direct_estimation_with_the_papers_reference_counts_diameters_from_under
 def test_linear_estimation_follows_eqs_17_and_18(own: int, others: list[int], groups: int) -> None:
     group = [own, *others]
     v_max, v_min = max(group), min(group)
-    n_w = groups if groups > 0 else len(group)
+    n_w = group_count(v_max, v_min, groups)
     if not others or v_max == v_min:
         expected = 1
     else:
@@ -161,7 +169,8 @@ def nonlinear_groups(own: int, others: list[int], groups: int) -> tuple[float, i
     a, b, c = root(max(group)), root(min(group)), root(own)
     if not others or b <= a:
         return None
-    n_w = groups if groups > 0 else len(group)
+    clamped = [min(max(v, 1), 1023) for v in group]
+    n_w = group_count(max(clamped), min(clamped), groups)
     return n_w * (c - a) / (b - a), n_w  # eqs. 29 and 30
 
 
@@ -200,8 +209,25 @@ def test_nonlinear_estimation_equals_eqs_29_and_30_off_group_boundaries(
     assert s == 1 + min(math.floor(x), n_w - 1)
 
 
+def test_with_groups_0_a_blobs_rows_move_together() -> None:
+    # Two particles a few centimetres apart, two one diameter further, one two diameters further:
+    # methods B and C give each row one S_n, as method A does (the SI's N_w: the body's length
+    # in particles toward the lamp, eqs. 19-22).
+    ground = [0.50, 0.53, 0.655, 0.68, 0.81]
+    readings = [reading_on_floor(d) for d in ground]
+    for method in (Method.LINEAR, Method.NONLINEAR):
+        s_n = [estimate(method, v, others_than(readings, k)) for k, v in enumerate(readings)]
+        assert s_n == [1, 1, 2, 2, 3]
+
+
 def test_nonlinear_estimation_places_a_line_of_particles_exactly() -> None:
-    # Fig. S7's planar field: five particles at (K + n) D from the lamp, K = 2.
+    # Fig. S7's planar field (the lamp level with the photocells): five particles at (K + n) D
+    # from the lamp, K = 2, in N_w = 5 groups. (GROUPS 0 would count rows with the lamp at the
+    # reference height above them, as method A does.)
     readings = [reading_at((2 + k) * DIAMETER_M) for k in range(5)]
+    for k, v in enumerate(readings):
+        assert estimate(Method.NONLINEAR, v, others_than(readings, k), groups=5) == k + 1
+    # The same line on the floor under a lamp at the reference height, GROUPS 0: its rank.
+    readings = [reading_on_floor((2 + k) * DIAMETER_M) for k in range(5)]
     for k, v in enumerate(readings):
         assert estimate(Method.NONLINEAR, v, others_than(readings, k)) == k + 1

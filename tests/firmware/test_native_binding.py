@@ -12,8 +12,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from particlebot.firmware import native
-from particlebot.protocol import DEFINITION_HASH, MAX_PAYLOAD, StreamDecoder
+from particlebot.firmware.native import NativeParticle
+from particlebot.protocol import (
+    DEFINITION_HASH,
+    MAX_PAYLOAD,
+    GetParam,
+    Param,
+    ParamValue,
+    StreamDecoder,
+)
 from particlebot.protocol.frames import encode_raw_frame
+from tests.firmware.conftest import Bench
 
 
 def test_the_library_was_built_from_the_same_protocol_definition() -> None:
@@ -88,3 +97,32 @@ def test_a_missing_library_names_the_make_target(tmp_path: Path) -> None:
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
     )
     assert "make native" in result.stdout
+
+
+def test_a_settings_image_boots_a_particle_with_its_id_and_values() -> None:
+    image = native.settings_image(42, {Param.ROUND_MS: 1500, Param.CYCLE_STEPS: 300})
+    assert len(image) == native.EEPROM_SIZE
+    bench = Bench(NativeParticle(eeprom=image, rng_seed=7))
+    try:
+        assert bench.particle.id == 42
+        assert bench.status().resets == 1  # this boot: the image itself counted none
+        for param, value in ((Param.ROUND_MS, 1500), (Param.CYCLE_STEPS, 300)):
+            bench.send(GetParam(target=42, param=param))
+            replies = [f.message for f in bench.collect() if isinstance(f.message, ParamValue)]
+            assert [(r.param, r.value) for r in replies] == [(param, value)]
+    finally:
+        bench.particle.close()
+
+
+@pytest.mark.parametrize(
+    ("particle_id", "params", "complaint"),
+    [
+        (1, {Param.ROUND_MS: 10}, "ROUND_MS=10 refused by the firmware: OUT_OF_RANGE"),
+        (254, {}, "id 254 is outside 1..253"),
+    ],
+)
+def test_a_settings_image_refuses_what_the_firmware_refuses(
+    particle_id: int, params: dict[Param, int], complaint: str
+) -> None:
+    with pytest.raises(ValueError, match=complaint):
+        native.settings_image(particle_id, params)

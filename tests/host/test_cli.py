@@ -4,42 +4,54 @@ from __future__ import annotations
 
 import asyncio
 import csv
+import json
 from importlib.metadata import version
 from pathlib import Path
 
 import pytest
+from textual.widgets import Static
 
 from particlebot.cli import main
-from particlebot.commands.demo import DemoResult, DemoScript, unresolved_neighbours
+from particlebot.commands.demo import DemoScript
 from particlebot.console.app import ConsoleApp
 from particlebot.protocol import DEFINITION_HASH
+from particlebot.radio import open_radio
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.swarm.api import Swarm
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 
 
-def test_the_demo_without_a_terminal_prints_a_summary_and_succeeds(
+def test_the_demo_without_a_terminal_prints_the_runs_table_s2_figures_and_json_last(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["demo", "--particles", "6", "--run-s", "4", "--log-dir", str(tmp_path)])
+    argv = ["demo", "--run-s", "90", "--no-animation", "--json"]  # ten particles, seed 3
+    code = main([*argv, "--log-dir", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "every S_n equals the particle's rank" in out
-    assert "STOP confirmed by all 6 particles" in out
+    assert "START method A with phototaxis on, 90 s, then STOP" in out
+    assert "STOP confirmed by all 10 particles" in out
+    assert "one-tailed t-test p = " in out
     (log,) = tmp_path.glob("*.jsonl")
     assert f"Log: {log}" in out
+    figures = json.loads(out.strip().splitlines()[-1])
+    assert figures["particles"] == 10 and figures["method"] == "A"
+    assert figures["simulated_s"] == pytest.approx(90, abs=2)
+    assert figures["centroid_toward_lamp_m"] > 0.01  # it crawls toward the lamp
+    assert figures["speed_pct_min_diameter_per_cycle"] > 0
+    assert 0 <= figures["p_value"] <= 1
 
 
-def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
-    world = VirtualSwarm(SwarmConfig(count=5))
-    radio = VirtualRadio(world, url="virtual://5", speed=20.0)
+def test_the_demo_script_drives_the_live_console_with_its_map_to_a_clean_end() -> None:
+    radio = open_radio("virtual://5?scenario=blob&start=0.6&seed=2&speed=20")
+    assert isinstance(radio, VirtualRadio)
     swarm = Swarm(radio, log_dir=None)
-    script = DemoScript(swarm, world, cycle_steps=75, locomote_s=2.0)
-    app = ConsoleApp(swarm, script=script, linger_s=0.1)
+    script = DemoScript(swarm, method="A", cycle_steps=75, run_s=20.0)
+    app = ConsoleApp(swarm, script=script, linger_s=0.1, world_map=script.world_map)
+    maps: list[str] = []
 
     async def run() -> int | None:
         async with app.run_test(size=(140, 40)) as pilot:
             while app.is_running:
+                maps.append(str(app.query_one("#map", Static).render()))
                 await pilot.pause(0.1)
         return app.return_value
 
@@ -49,13 +61,17 @@ def test_the_demo_script_drives_the_live_console_to_a_clean_end() -> None:
         swarm.close()
     assert script.stop_report is not None and script.stop_report.confirmed
     assert code == 0
-    assert [r.s_n for r in script.results()] == [1, 2, 3, 4, 5]
+    # The top view beside the table: the lamp, five particles, the centroid and the scale.
+    shown = maps[-1]
+    assert shown.count("*") == 1 and "+" in shown and "1 col = " in shown
+    assert sum(shown.count(c) for c in "O@") == 5
 
 
 def test_export_and_replay_read_the_log_the_demo_wrote(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(["demo", "--particles", "3", "--run-s", "1", "--log-dir", str(tmp_path)]) == 0
+    argv = ["demo", "--particles", "3", "--run-s", "61", "--no-animation"]
+    assert main([*argv, "--log-dir", str(tmp_path)]) == 0
     (log,) = tmp_path.glob("*.jsonl")
     capsys.readouterr()
     csv_path = tmp_path / "out.csv"
@@ -100,30 +116,6 @@ def test_the_radio_help_names_every_kind_of_radio(
     text = " ".join(capsys.readouterr().out.split())
     for example in ("serial://", "xbee://", "virtual://10", "emulated://5"):
         assert example in text
-
-
-def _result(particle_id: int, rank: int, s_n: int, intensity: int) -> DemoResult:
-    return DemoResult(
-        particle_id=particle_id,
-        start_distance=0.155 * rank,
-        end_distance=0.155 * rank,
-        rank=rank,
-        s_n=s_n,
-        state="IDLE",
-        intensity=intensity,
-    )
-
-
-def test_a_mismatch_from_readings_within_the_counting_tolerance_is_explained() -> None:
-    results = [_result(1, 1, 1, 900), _result(2, 2, 2, 171), _result(3, 3, 2, 165)]
-    lines = unresolved_neighbours(results)
-    assert len(lines) == 1
-    assert "particles 2 and 3 read 171 and 165" in lines[0]
-
-
-def test_neighbours_whose_readings_differ_enough_are_not_blamed() -> None:
-    results = [_result(1, 1, 1, 900), _result(2, 2, 2, 700), _result(3, 3, 3, 650)]
-    assert unresolved_neighbours(results) == []
 
 
 def test_version_names_the_package_and_the_protocol(capsys: pytest.CaptureFixture[str]) -> None:

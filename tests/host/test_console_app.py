@@ -56,8 +56,10 @@ def console(pilot: Pilot[int]) -> ConsoleApp:
 
 
 async def refreshed(pilot: Pilot[int]) -> None:
-    """Lets the app's refresh timer (every 0.05 s here) run at least once."""
-    await pilot.pause(0.12)
+    """Draws what the model knows now, as the app's refresh timer would, and lets the screen
+    settle (waiting for the timer instead failed on a loaded machine: it may not have fired)."""
+    console(pilot).refresh_view()
+    await pilot.pause()
 
 
 def table_text(app: ConsoleApp) -> list[dict[str, str]]:

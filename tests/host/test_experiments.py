@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -89,7 +90,8 @@ def test_a_trial_that_cannot_start_is_reported_and_the_file_says_what_follows(
     path = write(tmp_path, text)
     assert main(["run", str(path), "--log-dir", str(tmp_path / "logs")]) == 1
     out = capsys.readouterr().out
-    assert out.count("could not start: waited 2 s for 6: heard 5 (1, 2, 3, 4, 5)") == 2
+    # Five particles exist; at 20 % loss 2 s may not even hear them all.
+    assert len(re.findall(r"could not start: waited 2 s for 6: heard [1-5] \(", out)) == 2
     assert "[2/2] trial 2" in out  # on_failure = "continue" (the default)
     path = write(tmp_path, text.replace("wait_s = 2\n", 'wait_s = 2\non_failure = "stop"\n'))
     assert main(["run", str(path), "--log-dir", str(tmp_path / "stopped")]) == 1

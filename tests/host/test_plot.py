@@ -250,16 +250,23 @@ def test_read_records_refuses_a_directory_without_a_traceback(tmp_path: Path) ->
         read_records(tmp_path)
 
 
-def test_the_headless_demo_writes_its_plot_next_to_its_log(
+def test_the_headless_demo_writes_its_plot_and_its_film_next_to_its_log(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["demo", "--particles", "3", "--run-s", "2", "--log-dir", str(tmp_path)])
+    code = main(["demo", "--particles", "3", "--run-s", "61", "--log-dir", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0, out
     (log,) = tmp_path.glob("*.jsonl")
     png = log.with_suffix(".png")
     assert f"Plot: {png} (3 particles," in out
     assert png.read_bytes().startswith(PNG_MAGIC)
+    film = log.with_suffix(".mp4")
+    assert f"Animation: {film}" in out
+    assert film.read_bytes()[4:8] == b"ftyp"  # an MP4 container
+    # The plot of a simulated radio's log has the top view beside the time panels.
+    session = extract(read_records(log).records)
+    assert session.world is not None and session.world.ids == [1, 2, 3]
+    assert len(session.world.body_t) >= 120  # 2 Hz over the session
 
 
 def test_particles_that_obeyed_a_stop_are_drawn_stopped_from_the_stop_on(

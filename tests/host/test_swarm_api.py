@@ -10,10 +10,17 @@ import pytest
 
 import particlebot
 from particlebot import NotConfirmed, ParticlesMissing, State, Swarm
-from particlebot.protocol import Method, ParamResult
+from particlebot.protocol import (
+    BASE_STATION_ID,
+    BROADCAST_ID,
+    Method,
+    ParamResult,
+    Ping,
+    encode_frame,
+)
 from particlebot.radio import InvalidRadioUrlError
-from particlebot.radio.virtual import VirtualRadio, lose_on_air
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
+from particlebot.radio.virtual import VirtualRadio
+from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from tests.host.truth import true_states
 
 LOSSY = "virtual://6?speed=max&loss=0.2&seed=2"
@@ -88,13 +95,14 @@ def test_what_cannot_be_done_raises_with_who_and_why() -> None:
 
 
 def test_stop_names_who_did_not_confirm_and_why() -> None:
-    world = VirtualSwarm(SwarmConfig(count=4, kinematics=False))
-    deaf = world.members[2].node  # particle 3 hears nothing from now on, and is not heard
+    world = SimSwarm(SwarmConfig(count=4, kinematics=False))
+    deaf = 2  # particle 3 (index 2) hears nothing from now on, and is not heard
     with Swarm(VirtualRadio(world, url="virtual://4"), log_dir=None, stop_grace=0) as swarm:
         swarm.wait_for(count=4)
         swarm.start("D", cycle_steps=75)
         swarm.sleep(2)
-        world.air.drop = lambda source, receiver, data: deaf in (source, receiver)
+        world.air.drop = lambda packet, receiver: deaf in (packet.source, receiver)
+        swarm.sleep(0.5)  # what it sent before is in by now
         report = swarm.stop()
     assert not report.confirmed
     assert report.stopped == (1, 2, 4)
@@ -105,7 +113,7 @@ def test_stop_names_who_did_not_confirm_and_why() -> None:
 
 
 def test_leaving_the_block_by_an_exception_stops_a_running_swarm() -> None:
-    world = VirtualSwarm(SwarmConfig(count=3, kinematics=False))
+    world = SimSwarm(SwarmConfig(count=3, kinematics=False))
     with (
         pytest.raises(RuntimeError, match="the script failed"),
         Swarm(VirtualRadio(world, url="virtual://3"), log_dir=None) as swarm,
@@ -121,7 +129,7 @@ def test_leaving_the_block_by_an_exception_stops_a_running_swarm() -> None:
     [
         ("virtual://3?loss=1", "loss must be a number >= 0 and < 1"),
         ("virtual://3?delay_ms=-5", "delay_ms must be a number >= 0"),
-        ("virtual://3?scenario=blob", "scenario 'blob' does not exist"),
+        ("virtual://3?scenario=nowhere.toml", "nowhere.toml: no such scenario file"),
         ("serial:///dev/null?loss=2", "loss must be"),
         ("replay://x.jsonl?loss=0.1", "unknown option(s) loss"),
     ],
@@ -153,20 +161,20 @@ def test_delay_holds_packets_both_ways_on_the_virtual_base_link() -> None:
 
 def test_lost_copies_on_the_virtual_air_follow_the_seed() -> None:
     def losses(seed: int) -> list[bool]:
-        world = VirtualSwarm(SwarmConfig(count=1))
-        lose_on_air(world, 0.5, seed)
-        assert world.air.drop is not None
-        return [world.air.drop(0, 1, b"") for _ in range(50)]
+        world = SimSwarm(SwarmConfig(count=3, loss=0.5, seed=seed))
+        world.send_from_base(encode_frame(Ping(target=BROADCAST_ID), BASE_STATION_ID, 0))
+        world.run_for(3.0)  # the PING's copies and the answers' (with STATUS reports)
+        return [copy.lost for copy in world.air.receptions][:40]
 
     assert losses(3) == losses(3) != losses(4)
-    assert 10 < sum(losses(3)) < 40
+    assert 8 < sum(losses(3)) < 32
 
 
 def test_a_held_servo_puts_out_its_pulse_until_released() -> None:
     with Swarm.open("virtual://3?speed=max&loss=0.2&seed=4", log_dir=None) as swarm:
         swarm.wait_for(count=3)
         world = swarm.radio.swarm  # type: ignore[attr-defined]
-        firmware = world.members[1].firmware
+        firmware = world.native.firmware[1]
         held = swarm.hold_servo(2, 1830, 20)
         assert held.state == State.HOLDING and held.status is not None
         assert held.status.servo_pulse_us == 1830 == firmware.servo_pulse_us

@@ -10,23 +10,21 @@ import pytest
 
 from particlebot import IdInUse, State, Swarm
 from particlebot.fleet import Fleet, ParticleRecord, load_fleet, save_fleet
-from particlebot.radio.virtual import VirtualRadio, lose_on_air
+from particlebot.radio.virtual import VirtualRadio
+from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.roster import STOPPED_STATES
-from particlebot.virtual.swarm import SwarmConfig, VirtualSwarm
 from tests.host.truth import true_states
 
 SEEDS = 50
 HALF_LOSS = 0.5
 
 
-def a_swarm(count: int, seed: int = 1, loss: float = 0.0) -> VirtualSwarm:
+def a_swarm(count: int, seed: int = 1, loss: float = 0.0) -> SimSwarm:
     """Virtual particles that outlive the base-station sessions opened on them."""
-    world = VirtualSwarm(SwarmConfig(count=count, seed=seed, kinematics=False))
-    lose_on_air(world, loss, seed)
-    return world
+    return SimSwarm(SwarmConfig(count=count, seed=seed, loss=loss, kinematics=False))
 
 
-def session(world: VirtualSwarm, **options: object) -> Swarm:
+def session(world: SimSwarm, **options: object) -> Swarm:
     """A base-station session on the world, stepping it (as at speed=max)."""
     return Swarm(VirtualRadio(world, url="virtual://"), log_dir=None, **options)  # type: ignore[arg-type]
 
@@ -64,8 +62,8 @@ def test_without_a_fleet_stop_waits_for_as_many_as_were_seen_together() -> None:
         first.sleep(4.0)
     # Particle 5 falls out of range; a new session hears the four others, whose STATUS says
     # that five estimated together. Without the grace period, only that floor is left.
-    gone = world.members[4].node
-    world.air.drop = lambda source, receiver, data: gone in (source, receiver)
+    gone = 4  # particle 5's index
+    world.air.drop = lambda packet, receiver: gone in (packet.source, receiver)
     with session(world, stop_grace=0) as second:
         second.wait_for(count=4)
         assert second.tracker.largest_group == 5

@@ -5,6 +5,7 @@ from __future__ import annotations
 from particlebot.protocol import FRAME_OVERHEAD, SYNC
 from particlebot.radio import open_radio
 from particlebot.radio.virtual import VirtualRadio
+from particlebot.sim.air.medium import BASE, AirPacket
 from particlebot.swarm.api import Swarm
 
 
@@ -26,12 +27,11 @@ def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
     # then send INTENSITY, periodic STATUS and answers to the console's PINGs close together.
     radio = open_radio("virtual://10?speed=max&kinematics=0")
     assert isinstance(radio, VirtualRadio)
-    base_node = 0  # the base station's radio is the first node on the air
     packets: list[tuple[int, bytes]] = []
 
-    def record(source: int, receiver: int, data: bytes) -> bool:
-        if receiver == base_node:
-            packets.append((source, data))
+    def record(packet: AirPacket, receiver: int) -> bool:
+        if receiver == BASE:
+            packets.append((packet.source, packet.data))
         return False  # nothing is lost: this only watches the air
 
     radio.swarm.air.drop = record
@@ -45,7 +45,7 @@ def test_start_stop_cycles_on_a_quiet_virtual_air_lose_no_frame() -> None:
         swarm.sleep(3)  # a STATUS from every particle after the last STOP
         drops = dict(swarm.tracker.drops)
         particles = swarm.particles()
-    particle_packets = [data for source, data in packets if source != base_node]
+    particle_packets = [data for source, data in packets if source != BASE]
     assert len(particle_packets) > 200
     not_one_frame = [data.hex() for data in particle_packets if len(frame_lengths(data) or []) != 1]
     assert not_one_frame == []

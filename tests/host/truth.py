@@ -4,14 +4,13 @@ from __future__ import annotations
 
 from particlebot.firmware.native import NativeParticle
 from particlebot.protocol import State
-from particlebot.virtual.swarm import VirtualSwarm
+from particlebot.sim.swarm import SimSwarm
 
 
-def true_states(world: VirtualSwarm) -> list[State]:
+def true_states(world: SimSwarm) -> list[State]:
     """Each virtual particle's state, read from its logic rather than heard."""
     states = []
-    for member in world.members:
-        firmware = member.firmware
+    for firmware in world.native.firmware:
         assert isinstance(firmware, NativeParticle)
         states.append(State(firmware.status().state))
     return states

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from particlebot.sim import default_elf, default_harness
+from particlebot.sim.particles.emulated.harness import default_elf, default_harness
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -22,9 +22,9 @@ from particlebot.calibration.servo import TABLE_PARAMS, target_radii_mm
 from particlebot.calibration.servo_bench import ServoBench, calibrate_servo
 from particlebot.protocol import PARAM_SPECS, Param, State
 from particlebot.radio.emulated import EmulatedRadio
-from particlebot.sim.swarm import EmulatedSwarm, SwarmConfig
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.swarm.api import Swarm
-from tests.sim.test_smoke import SERVO_JITTER_US
+from tests.sim.particles.emulated.test_smoke import SERVO_JITTER_US
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -37,10 +37,14 @@ def transmission(pulse: float) -> float:
 
 
 @pytest.fixture
-def emulated() -> Iterator[tuple[Swarm, EmulatedSwarm]]:
+def emulated() -> Iterator[tuple[Swarm, SimSwarm]]:
     # keep_history: the servo pulses stay recorded for the test to read.
-    world = EmulatedSwarm(SwarmConfig(count=3, keep_history=True, photocell_spread=0.12, seed=3))
-    swarm = Swarm(EmulatedRadio(world, owns_swarm=True), log_dir=None, stepped=True)
+    world = SimSwarm(
+        SwarmConfig(level=Level.EMULATED, count=3, keep_history=True, photocell_spread=0.12, seed=3)
+    )
+    swarm = Swarm(
+        EmulatedRadio(world, url="emulated://3", owns_swarm=True), log_dir=None, stepped=True
+    )
     try:
         yield swarm, world
     finally:
@@ -48,10 +52,10 @@ def emulated() -> Iterator[tuple[Swarm, EmulatedSwarm]]:
 
 
 def test_servo_calibration_holds_each_pulse_on_d9_and_writes_a_table_the_image_takes(
-    emulated: tuple[Swarm, EmulatedSwarm],
+    emulated: tuple[Swarm, SimSwarm],
 ) -> None:
     swarm, world = emulated
-    sim = world.sims[1]  # particle 2
+    sim = world.emulated.sims[1]  # particle 2
     held: list[int] = []
 
     def measure(prompt: str) -> str:
@@ -87,7 +91,7 @@ def test_servo_calibration_holds_each_pulse_on_d9_and_writes_a_table_the_image_t
 
 
 def test_photocell_calibration_on_the_image_makes_eq14_hold(
-    emulated: tuple[Swarm, EmulatedSwarm], tmp_path: Path
+    emulated: tuple[Swarm, SimSwarm], tmp_path: Path
 ) -> None:
     swarm, world = emulated
     ids = [1, 2, 3]

@@ -10,7 +10,9 @@ import pytest
 from particlebot.cli import main
 from particlebot.protocol import State
 from particlebot.radio import InvalidRadioUrlError, RadioError, open_radio, parse_radio_url
-from particlebot.radio.emulated import swarm_config_from_url
+from particlebot.radio.emulated import emulated_config
+from particlebot.sim.scenarios.scenario import PlacementKind
+from particlebot.sim.swarm import Level
 from particlebot.swarm.api import Swarm
 
 
@@ -33,14 +35,16 @@ def test_bad_emulated_urls_are_refused_with_advice(url: str) -> None:
 
 
 def test_emulated_url_options_reach_the_swarm_configuration() -> None:
-    config = swarm_config_from_url(
+    config = emulated_config(
         parse_radio_url("emulated://7?loss=0.2&delay_ms=5&spacing=0.2&start=0.3&seed=4")
     )
-    assert config.count == 7
+    assert config.level is Level.EMULATED
+    swarm = config.resolved_scenario().swarm
+    assert swarm.particles == 7 and swarm.placement is PlacementKind.LINE
+    assert swarm.spacing == 0.2 and swarm.at == (0.3, 0.0)
     assert config.loss == 0.2
     assert config.delay_us == 5000
-    assert config.spacing == 0.2 and config.start == 0.3
-    assert config.seed == 4
+    assert config.seed == 4 and config.scenario.seed == 4
     assert not config.keep_history  # a console may run for hours
 
 
@@ -72,7 +76,7 @@ def test_the_swarm_api_finds_starts_and_stops_emulated_particles_at_20_percent_l
 
 
 @pytest.mark.usefixtures("built_images")
-def test_an_experiment_runs_on_emulated_particles_and_claims_no_distance_they_did_not_move(
+def test_an_experiment_runs_on_emulated_particles_and_says_how_far_they_moved(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     experiment = tmp_path / "experiment.toml"
@@ -90,4 +94,5 @@ def test_an_experiment_runs_on_emulated_particles_and_claims_no_distance_they_di
     with (folder / "summary.csv").open() as file:
         (row,) = csv.DictReader(file)
     assert (row["stop_confirmed"], row["particles_lost"]) == ("yes", "0")
-    assert row["toward_lamp_m"] == "-"  # emulated particles stand where they were put
+    # The image's servo moves its body in the world: the centroid's change is known.
+    assert abs(float(row["toward_lamp_m"])) < 0.05

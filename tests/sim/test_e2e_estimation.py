@@ -19,11 +19,20 @@ from particlebot.protocol import (
     Start,
     State,
 )
-from particlebot.sim import BASE, CPU_HZ, BaseStation, EmulatedSwarm, SwarmConfig
-from particlebot.sim.servo import STEP_S, bursts, contracted_width, cycle_starts
+from particlebot.sim.air.medium import BASE
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.particles.emulated.servo import (
+    bursts,
+    contracted_width,
+    cycle_starts,
+    servo_step_s,
+)
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import BaseStation
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
+STEP_S = servo_step_s()  # one servo step, as the firmware defines it
 COUNT = 5
 CYCLE_STEPS = 75
 T_S = CYCLE_STEPS * STEP_S
@@ -35,8 +44,8 @@ CLOCK_TICK_S = 0.003
 
 
 @pytest.fixture
-def swarm() -> Iterator[EmulatedSwarm]:
-    with EmulatedSwarm(SwarmConfig(count=COUNT)) as emulated:
+def swarm() -> Iterator[SimSwarm]:
+    with SimSwarm(SwarmConfig(level=Level.EMULATED, count=COUNT)) as emulated:
         yield emulated
 
 
@@ -57,18 +66,18 @@ def set_round_length(base: BaseStation) -> None:
     assert base.swarm.run_until_true(lambda: confirmed() == set(base.swarm.ids), 1.0)
 
 
-def start_received_s(swarm: EmulatedSwarm, index: int, start_frame: bytes) -> float:
+def start_received_s(swarm: SimSwarm, index: int, start_frame: bytes) -> float:
     """When the START frame's last byte reached particle index's serial port."""
     copies = [
         r
-        for r in swarm.medium.receptions
+        for r in swarm.air.receptions
         if r.receiver == index and r.packet.source == BASE and r.packet.data == start_frame
     ]
     assert copies and copies[0].delivered
     return copies[0].last / CPU_HZ
 
 
-def heard_in_round(swarm: EmulatedSwarm, index: int, run_id: int, until_s: float) -> dict[int, int]:
+def heard_in_round(swarm: SimSwarm, index: int, run_id: int, until_s: float) -> dict[int, int]:
     """The other particles' INTENSITY readings of round 0 that reached particle index's firmware
     before its round ended, by sender (a later copy replaces an earlier one, as in the firmware)."""
     frames, _ = swarm.received(index, until_s=until_s)
@@ -81,10 +90,10 @@ def heard_in_round(swarm: EmulatedSwarm, index: int, run_id: int, until_s: float
     return readings
 
 
-def expansions_s(swarm: EmulatedSwarm, index: int, after_s: float) -> list[float]:
+def expansions_s(swarm: SimSwarm, index: int, after_s: float) -> list[float]:
     """Start of each whole expansion cycle of particle index after after_s, read from its servo
     pulses: the frame that carried the cycle's step 0, right before the first wider pulse."""
-    pulses = swarm.sims[index].servo_pulses
+    pulses = swarm.emulated.sims[index].servo_pulses
     resting = [p for p in pulses if p.start_s < after_s][-50:]
     later = [p for p in pulses if p.start_s >= after_s]
     contracted = contracted_width(resting)
@@ -102,7 +111,7 @@ def expansions_s(swarm: EmulatedSwarm, index: int, after_s: float) -> list[float
     ids=lambda method: method.name,
 )
 def test_each_particle_estimates_as_the_firmware_library_does_and_moves_at_its_turn(
-    swarm: EmulatedSwarm, method: Method
+    swarm: SimSwarm, method: Method
 ) -> None:
     base = BaseStation(swarm)
     swarm.run_for(0.3)

@@ -23,8 +23,11 @@ from particlebot.protocol import (
     StreamDecoder,
     encode_frame,
 )
-from particlebot.sim import BASE, CPU_HZ, BaseStation, EmulatedSwarm, SwarmConfig
-from particlebot.sim.servo import missed_frames, period_errors_us
+from particlebot.sim.air.medium import BASE
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.particles.emulated.servo import missed_frames, period_errors_us
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import BaseStation
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -38,8 +41,10 @@ SERVO_JITTER_US = 20
 
 
 @pytest.fixture
-def swarm() -> Iterator[EmulatedSwarm]:
-    with EmulatedSwarm(SwarmConfig(count=COUNT, params={Param.ROUND_MS: ROUND_MS})) as emulated:
+def swarm() -> Iterator[SimSwarm]:
+    with SimSwarm(
+        SwarmConfig(level=Level.EMULATED, count=COUNT, params={Param.ROUND_MS: ROUND_MS})
+    ) as emulated:
         yield emulated
 
 
@@ -82,7 +87,7 @@ def damaged(rng: random.Random) -> bytes:
     return bytes(frame)
 
 
-def spray(swarm: EmulatedSwarm, rng: random.Random, seconds: float) -> bytes:
+def spray(swarm: SimSwarm, rng: random.Random, seconds: float) -> bytes:
     """Puts random bytes and damaged frames on the air for `seconds` (about half the capacity
     of a 9600-baud link); returns everything sprayed."""
     sprayed = bytearray()
@@ -110,7 +115,7 @@ def status_after_quiet_ping(base: BaseStation, index: int) -> tuple[Status, floa
         copy = next(
             (
                 r
-                for r in swarm.medium.receptions
+                for r in swarm.air.receptions
                 if r.receiver == index and r.packet.source == BASE and r.packet.data == raw
             ),
             None,
@@ -118,7 +123,7 @@ def status_after_quiet_ping(base: BaseStation, index: int) -> tuple[Status, floa
         if copy is None:
             return False
         assert copy.delivered
-        sent = bytes(b.value for b in swarm.sims[index].uart if b.cycle >= copy.last)
+        sent = bytes(b.value for b in swarm.emulated.sims[index].uart if b.cycle >= copy.last)
         for frame in StreamDecoder().feed(sent):
             if isinstance(frame.message, Status):
                 found.append((frame.message, copy.last / CPU_HZ))
@@ -129,7 +134,7 @@ def status_after_quiet_ping(base: BaseStation, index: int) -> tuple[Status, floa
     return found[0]
 
 
-def test_sprayed_garbage_is_counted_and_leaves_every_particle_working(swarm: EmulatedSwarm) -> None:
+def test_sprayed_garbage_is_counted_and_leaves_every_particle_working(swarm: SimSwarm) -> None:
     base = BaseStation(swarm)
     swarm.run_for(0.3)
     before = base.ping_all()
@@ -143,7 +148,7 @@ def test_sprayed_garbage_is_counted_and_leaves_every_particle_working(swarm: Emu
     assert StreamDecoder().feed(sprayed) == []
     swarm.run_for(0.3)  # quiet: every parser has timed out on whatever it held
 
-    for index, sim in enumerate(swarm.sims):
+    for index, sim in enumerate(swarm.emulated.sims):
         particle_id = swarm.ids[index]
         assert sim.resets == [] and sim.crashed_cycle is None, f"particle {particle_id}"
         # The servo never missed a 50 Hz frame: the main loop and its timer kept running.

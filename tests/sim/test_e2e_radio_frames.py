@@ -17,7 +17,10 @@ from particlebot.protocol import (
     StreamDecoder,
     encode_frame,
 )
-from particlebot.sim import BASE, CPU_HZ, BaseStation, EmulatedSwarm, SwarmConfig
+from particlebot.sim.air.medium import BASE
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import BaseStation
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -38,12 +41,12 @@ def whole_frames(data: bytes) -> list[bytes]:
 
 
 @pytest.fixture
-def trio() -> Iterator[EmulatedSwarm]:
-    with EmulatedSwarm(SwarmConfig(count=3, params=QUIET)) as swarm:
+def trio() -> Iterator[SimSwarm]:
+    with SimSwarm(SwarmConfig(level=Level.EMULATED, count=3, params=QUIET)) as swarm:
         yield swarm
 
 
-def test_back_to_back_replies_leave_as_one_rf_packet_per_frame(trio: EmulatedSwarm) -> None:
+def test_back_to_back_replies_leave_as_one_rf_packet_per_frame(trio: SimSwarm) -> None:
     """Two STATUS frames and a PARAM_VALUE queued at once (104 B and more: past one RF payload)
     go out one frame per packet, so a foreign packet landing between them at every receiver
     corrupts nothing."""
@@ -56,7 +59,7 @@ def test_back_to_back_replies_leave_as_one_rf_packet_per_frame(trio: EmulatedSwa
     base.send(GetParam(target=talker, param=Param.ROUND_MS))
 
     def talker_on_air() -> bool:
-        return any(p.source == 0 and p.aired / CPU_HZ >= asked for p in swarm.medium.packets)
+        return any(p.source == 0 and p.aired / CPU_HZ >= asked for p in swarm.air.packets)
 
     assert swarm.run_until_true(talker_on_air, 0.5, check_every_s=0.001)
     # A foreign frame put on the air now reaches every radio right after the talker's first
@@ -65,7 +68,7 @@ def test_back_to_back_replies_leave_as_one_rf_packet_per_frame(trio: EmulatedSwa
     swarm.inject(foreign)
     swarm.run_for(0.5)
 
-    packets = [p for p in swarm.medium.packets if p.source == 0 and p.aired / CPU_HZ >= asked]
+    packets = [p for p in swarm.air.packets if p.source == 0 and p.aired / CPU_HZ >= asked]
     assert all(len(whole_frames(p.data)) == 1 for p in packets)
     assert len(packets) >= 3
     replies = [type(m) for heard, m in base.frames(since_s=asked) if heard.source == 0]
@@ -93,7 +96,7 @@ def test_broadcast_ping_answers_spread_over_slots_and_fit_the_base_radio() -> No
     known), all within 0.6 s, and the base station's radio buffer never overflows; a PING to one
     id is answered at once."""
     count = 8
-    with EmulatedSwarm(SwarmConfig(count=count, params=QUIET)) as swarm:
+    with SimSwarm(SwarmConfig(level=Level.EMULATED, count=count, params=QUIET)) as swarm:
         base = BaseStation(swarm)
         swarm.run_for(0.5)
         asked = base.send(Ping(target=BROADCAST_ID))
@@ -104,11 +107,11 @@ def test_broadcast_ping_answers_spread_over_slots_and_fit_the_base_radio() -> No
         for index, particle_id in enumerate(swarm.ids):
             copy = next(
                 r
-                for r in swarm.medium.receptions
+                for r in swarm.air.receptions
                 if r.receiver == index and r.packet.source == BASE and r.packet.data == ping
             )
             received = copy.last
-            sent = [b for b in swarm.sims[index].uart if b.cycle > received]
+            sent = [b for b in swarm.emulated.sims[index].uart if b.cycle > received]
             assert sent, f"particle {particle_id} did not answer"
             delay = (sent[0].cycle - received) / CPU_HZ
             delays.append(delay)
@@ -119,7 +122,7 @@ def test_broadcast_ping_answers_spread_over_slots_and_fit_the_base_radio() -> No
         assert all(abs(d - s * SLOT_S) < 0.003 for d, s in zip(delays, slots, strict=True)), delays
         assert all(0 <= s < SLOTS_WITHOUT_GROUP for s in slots), slots
         assert len(set(slots)) >= 4, slots
-        to_base = [r for r in swarm.medium.receptions if r.receiver == BASE]
+        to_base = [r for r in swarm.air.receptions if r.receiver == BASE]
         assert not any(r.overflow for r in to_base)
         assert sorted(base.statuses(asked)) == swarm.ids
 
@@ -129,9 +132,9 @@ def test_broadcast_ping_answers_spread_over_slots_and_fit_the_base_radio() -> No
         swarm.run_for(0.3)
         copy = next(
             r
-            for r in swarm.medium.receptions
+            for r in swarm.air.receptions
             if r.receiver == 3 and r.packet.source == BASE and r.packet.data == ping
         )
-        first = next(b for b in swarm.sims[3].uart if b.cycle > copy.last)
+        first = next(b for b in swarm.emulated.sims[3].uart if b.cycle > copy.last)
         assert (first.cycle - copy.last) / CPU_HZ < 0.003
         assert list(base.statuses(asked)) == [swarm.ids[3]]

@@ -22,10 +22,13 @@ from particlebot.protocol import (
     encode_frame,
 )
 from particlebot.session import ReceivedFrame
-from particlebot.sim import BASE, CPU_HZ, AirPacket, EmulatedSwarm, SwarmConfig, node_name
-from particlebot.sim.harness import ServoPulse
-from particlebot.sim.servo import contracted_width
-from particlebot.sim.swarm import packet_frames
+from particlebot.sim.air.medium import BASE, AirPacket
+from particlebot.sim.clock import CPU_HZ
+from particlebot.sim.particles.emulated.harness import ServoPulse
+from particlebot.sim.particles.emulated.particles import node_name
+from particlebot.sim.particles.emulated.servo import contracted_width
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import packet_frames
 from particlebot.swarm.tracker import SwarmTracker
 
 pytestmark = pytest.mark.usefixtures("built_images")
@@ -49,7 +52,7 @@ class Console:
     emulated swarm from this thread, polled as often as the live console polls it: what the
     session thread and the UI's timer do for a real radio."""
 
-    def __init__(self, swarm: EmulatedSwarm) -> None:
+    def __init__(self, swarm: SimSwarm) -> None:
         self.swarm = swarm
         self.seq = itertools.count()
         self.model = SwarmTracker(self, lambda: swarm.time_s)
@@ -82,11 +85,11 @@ def is_stop(packet: AirPacket) -> bool:
     )
 
 
-def stops_received_s(swarm: EmulatedSwarm, index: int) -> list[float]:
+def stops_received_s(swarm: SimSwarm, index: int) -> list[float]:
     """When each STOP that reached particle index had fully arrived."""
     return [
         copy.last / CPU_HZ
-        for copy in swarm.medium.receptions
+        for copy in swarm.air.receptions
         if copy.receiver == index and copy.delivered and is_stop(copy.packet)
     ]
 
@@ -123,7 +126,7 @@ AIRS = {
 
 @dataclass
 class Outcome:
-    swarm: EmulatedSwarm
+    swarm: SimSwarm
     console: Console
     commanded_s: float
     """When the console's STOP command sent its first copy."""
@@ -132,7 +135,7 @@ class Outcome:
     widths_at_stop: list[float]
 
 
-def stop_a_running_swarm(swarm: EmulatedSwarm, air: Air) -> Outcome:
+def stop_a_running_swarm(swarm: SimSwarm, air: Air) -> Outcome:
     """Lists the particles, STARTs them, and STOPs them while two or more are expanded."""
     unlucky: list[int] = []
     taken: list[AirPacket] = []
@@ -143,7 +146,7 @@ def stop_a_running_swarm(swarm: EmulatedSwarm, air: Air) -> Outcome:
             return True
         return False
 
-    swarm.medium.drop = drop
+    swarm.air.drop = drop
     console = Console(swarm)
     for _ in range(10):  # as a person would: PING until every particle is listed
         console.model.ping()
@@ -155,7 +158,7 @@ def stop_a_running_swarm(swarm: EmulatedSwarm, air: Air) -> Outcome:
     start = console.model.start(Method.COUNTING, cycle_steps=CYCLE_STEPS)
 
     def widths() -> list[float]:
-        return [sim.servo_pulses[-1].width_us for sim in swarm.sims]
+        return [sim.servo_pulses[-1].width_us for sim in swarm.emulated.sims]
 
     for _ in range(200):
         console.run_for(0.05)
@@ -178,13 +181,15 @@ def stop_a_running_swarm(swarm: EmulatedSwarm, air: Air) -> Outcome:
 def outcome(request: pytest.FixtureRequest) -> Iterator[Outcome]:
     """One swarm per kind of air, stopped once; the tests read what happened."""
     air = AIRS[request.param]
-    config = SwarmConfig(count=COUNT, loss=air.loss, params={Param.ROUND_MS: ROUND_MS}, seed=7)
-    with EmulatedSwarm(config) as swarm:
+    config = SwarmConfig(
+        level=Level.EMULATED, count=COUNT, loss=air.loss, params={Param.ROUND_MS: ROUND_MS}, seed=7
+    )
+    with SimSwarm(config) as swarm:
         yield stop_a_running_swarm(swarm, air)
 
 
 def test_every_servo_is_contracted_within_a_second_of_the_consoles_stop(outcome: Outcome) -> None:
-    for index, sim in enumerate(outcome.swarm.sims):
+    for index, sim in enumerate(outcome.swarm.emulated.sims):
         since = contracted_since_s(sim.servo_pulses)
         assert since - outcome.commanded_s < STOP_WITHIN_S, (
             f"particle {outcome.swarm.ids[index]} contracted {since - outcome.commanded_s:.3f} s "
@@ -214,7 +219,7 @@ def test_the_particle_that_missed_the_first_stop_obeyed_a_later_copy_in_time(
     assert outcome.widths_at_stop[index] == max(outcome.widths_at_stop) > EXPANDED_US
     first_s = stops_received_s(outcome.swarm, index)[0]
     assert first_s - outcome.commanded_s >= 0.1
-    since = contracted_since_s(outcome.swarm.sims[index].servo_pulses)
+    since = contracted_since_s(outcome.swarm.emulated.sims[index].servo_pulses)
     assert since - outcome.commanded_s < STOP_WITHIN_S
 
 
@@ -222,7 +227,7 @@ def test_the_particle_that_missed_the_first_stop_obeyed_a_later_copy_in_time(
 def test_random_loss_took_copies_of_stop_away_and_every_particle_still_got_one(
     outcome: Outcome,
 ) -> None:
-    medium = outcome.swarm.medium
+    medium = outcome.swarm.air
     copies = [r for r in medium.receptions if r.receiver != BASE and is_stop(r.packet)]
     lost = [r for r in copies if r.lost]
     assert lost, "the seeded losses spared every STOP: this air tests nothing; change the seed"

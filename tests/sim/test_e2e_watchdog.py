@@ -16,7 +16,8 @@ from particlebot.protocol import (
     Start,
     State,
 )
-from particlebot.sim import BaseStation, EmulatedSwarm, SwarmConfig
+from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
+from particlebot.sim.swarm.base import BaseStation
 
 pytestmark = pytest.mark.usefixtures("built_images")
 
@@ -26,9 +27,11 @@ MCUSR_WATCHDOG = 0x08
 
 
 @pytest.fixture
-def swarm() -> Iterator[EmulatedSwarm]:
-    config = SwarmConfig(count=COUNT, fault_elf=(HUNG,), params={Param.ROUND_MS: 1000})
-    with EmulatedSwarm(config) as emulated:
+def swarm() -> Iterator[SimSwarm]:
+    config = SwarmConfig(
+        level=Level.EMULATED, count=COUNT, fault_elf=(HUNG,), params={Param.ROUND_MS: 1000}
+    )
+    with SimSwarm(config) as emulated:
         yield emulated
 
 
@@ -48,7 +51,7 @@ def param_value(base: BaseStation, particle_id: int, param: Param, since_s: floa
     return answers()[0]
 
 
-def test_watchdog_reset_keeps_the_particles_id_and_settings(swarm: EmulatedSwarm) -> None:
+def test_watchdog_reset_keeps_the_particles_id_and_settings(swarm: SimSwarm) -> None:
     base = BaseStation(swarm)
     swarm.run_for(0.3)
     hung_id = swarm.ids[HUNG]
@@ -57,7 +60,7 @@ def test_watchdog_reset_keeps_the_particles_id_and_settings(swarm: EmulatedSwarm
     assert (answer.result, answer.value) == (ParamResult.OK, 37)
     before = base.ping_all()[hung_id]
 
-    sim = swarm.sims[HUNG]
+    sim = swarm.emulated.sims[HUNG]
     sim.set_fault_pin(True)
     hung_s = swarm.time_s
     assert swarm.run_until_true(lambda: bool(sim.resets), 1.0), "the watchdog did not fire"
@@ -75,7 +78,7 @@ def test_watchdog_reset_keeps_the_particles_id_and_settings(swarm: EmulatedSwarm
     asked = base.send(GetParam(target=hung_id, param=Param.COUNT_TOLERANCE))
     answer = param_value(base, hung_id, Param.COUNT_TOLERANCE, asked)
     assert (answer.result, answer.value) == (ParamResult.OK, 37)
-    for index, other in enumerate(swarm.sims):
+    for index, other in enumerate(swarm.emulated.sims):
         if index != HUNG:
             assert other.resets == []
 

@@ -95,6 +95,15 @@ void pb_particle_tick(pb_particle *particle, uint32_t now_ms) {
   if (elapsed == 0) p.tick(now_ms);
 }
 
+void pb_particles_tick(pb_particle *const *particles, size_t count, uint32_t now_ms,
+                       uint32_t *radius_um, uint8_t *tx_waiting) {
+  for (size_t i = 0; i < count; ++i) {
+    pb_particle_tick(particles[i], now_ms);
+    radius_um[i] = particles[i]->particle.radius_um();
+    tx_waiting[i] = particles[i]->particle.tx_pending() > 0 ? 1 : 0;
+  }
+}
+
 size_t pb_particle_transmit(pb_particle *particle, uint8_t *out, size_t capacity) {
   return particle->particle.take_tx(out, capacity);
 }
@@ -202,10 +211,6 @@ uint8_t pb_s_n_max(void) {
   return pb::kMaxSn;
 }
 
-uint32_t pb_group_count_max(void) {
-  return pb::kMaxGroupCount;
-}
-
 void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint8_t wave_size_param,
                    uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
                    uint32_t out[3]) {
@@ -223,6 +228,52 @@ void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint
   out[0] = plan.first_cycle_ms;
   out[1] = plan.pause_ms;
   out[2] = plan.epoch_ms;
+}
+
+size_t pb_settings_image(uint8_t id, const uint8_t *params, const int32_t *values, size_t count,
+                         uint8_t *out, size_t capacity, size_t *refused, uint8_t *result) {
+  if (capacity < PB_EEPROM_SIZE) return 0;
+  RamStorage storage;
+  pb::Settings settings(storage);
+  (void)settings.load();  // a blank chip: the defaults and the unassigned id
+  if (!settings.set_id(id)) {
+    if (refused != NULL) *refused = count;
+    return 0;
+  }
+  for (size_t i = 0; i < count; ++i) {
+    const pb::ParamResult r = settings.set(params[i], values[i]);
+    if (r != pb::ParamResult::OK) {
+      if (refused != NULL) *refused = i;
+      if (result != NULL) *result = static_cast<uint8_t>(r);
+      return 0;
+    }
+  }
+  memcpy(out, storage.bytes(), PB_EEPROM_SIZE);
+  return PB_EEPROM_SIZE;
+}
+
+uint16_t pb_frame_timeout_ms(void) {
+  return pb::kFrameTimeoutMs;
+}
+
+uint16_t pb_ping_slot_ms(void) {
+  return pb::Particle::kPingSlotMs;
+}
+
+uint8_t pb_ping_slots_unknown(void) {
+  return pb::Particle::kPingSlotsUnknown;
+}
+
+uint8_t pb_servo_cal_points(void) {
+  return pb::kServoCalPoints;
+}
+
+uint16_t pb_servo_pulse_min_us(void) {
+  return pb::kServoPulseMinUs;
+}
+
+uint16_t pb_servo_pulse_max_us(void) {
+  return pb::kServoPulseMaxUs;
 }
 
 }  // extern "C"

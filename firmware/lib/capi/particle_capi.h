@@ -40,6 +40,12 @@ void pb_particle_receive(pb_particle *particle, const uint8_t *bytes, size_t cou
 // simulated time for servo steps to fall on their 20 ms boundaries.
 void pb_particle_tick(pb_particle *particle, uint32_t now_ms);
 
+// Many particles at once, for swarms (one call instead of three per particle and tick): each of
+// particles[0..count) is ticked to now_ms as pb_particle_tick does, then radius_um[i] receives its
+// radius and tx_waiting[i] whether a frame waits in its Serial1 queue (1) or not (0).
+void pb_particles_tick(pb_particle *const *particles, size_t count, uint32_t now_ms,
+                       uint32_t *radius_um, uint8_t *tx_waiting);
+
 // Moves up to capacity bytes of the frame at the head of the Serial1 queue into out and returns
 // how many; it never goes past that frame's end, so a call with room for a whole frame
 // (PB_MAX_FRAME) takes exactly one frame, as main.cpp hands one frame at a time to Serial1.
@@ -96,8 +102,6 @@ uint16_t pb_servo_step_ms(void);
 uint16_t pb_adc_full_scale(void);
 // The largest S_n any method gives.
 uint8_t pb_s_n_max(void);
-// N_w of methods B and C with GROUPS = 0 is one group per particle, capped at this.
-uint32_t pb_group_count_max(void);
 
 // The epoch a particle plans when its round gives s_n and it heard group_size particles (itself
 // included): out[0] first cycle after the common start, out[1] pause t_p, out[2] epoch length,
@@ -106,6 +110,28 @@ uint32_t pb_group_count_max(void);
 void pb_plan_epoch(uint8_t method, uint16_t cycle_steps, uint8_t wave_size, uint8_t wave_size_param,
                    uint32_t update_interval_ms, uint32_t round_ms, uint8_t s_n, uint8_t group_size,
                    uint32_t out[3]);
+
+// ---- what a simulation of the firmware needs to know of it -----------------------------------
+
+// The settings block a particle with this id keeps in EEPROM, written by the firmware's own
+// Settings code (layout, defaults, CRC), with params[i] set to values[i] in order, each checked
+// as SET_PARAM checks it. Fills out (capacity >= PB_EEPROM_SIZE; the bytes after the block read
+// as an erased chip's 0xFF) and returns PB_EEPROM_SIZE. Returns 0 and writes nothing useful when
+// the id is not 1..253 (*refused = count) or a value is refused (*refused = its index, *result
+// = the ParamResult, e.g. OUT_OF_RANGE).
+size_t pb_settings_image(uint8_t id, const uint8_t *params, const int32_t *values, size_t count,
+                         uint8_t *out, size_t capacity, size_t *refused, uint8_t *result);
+
+// A partial frame older than this is dropped by the particle's parser (ms without a byte).
+uint16_t pb_frame_timeout_ms(void);
+// A broadcast request that draws a reply is answered in a random one of pb_ping_slots_unknown()
+// slots of pb_ping_slot_ms() each while the particle knows no group size.
+uint16_t pb_ping_slot_ms(void);
+uint8_t pb_ping_slots_unknown(void);
+// Points of the servo calibration table (SERVO_CAL_0..) and the pulses a servo may be given.
+uint8_t pb_servo_cal_points(void);
+uint16_t pb_servo_pulse_min_us(void);
+uint16_t pb_servo_pulse_max_us(void);
 
 #ifdef __cplusplus
 }

@@ -15,6 +15,11 @@ uint8_t saturate_index(uint32_t zero_based) {
   return zero_based >= kMaxIndex ? kMaxIndex : static_cast<uint8_t>(zero_based + 1);
 }
 
+// S_n of the group index eq. 18 or eq. 30 gives: 1 + min(index, N_w - 1).
+__attribute__((noinline)) uint8_t band(uint32_t index, uint32_t n_w) {
+  return saturate_index(index > n_w - 1 ? n_w - 1 : index);
+}
+
 // floor(sqrt(m) * 2^13) for m < 2^18, two bits of the radicand (m followed by 26 zero bits) per
 // iteration: no float library on the AVR. The remainder stays below twice the root (< 2^23), so
 // everything fits 32 bits. One routine for both uses keeps the flash cost down.
@@ -44,11 +49,13 @@ __attribute__((noinline)) uint32_t wide_quotient(uint32_t a, uint32_t b, uint32_
   return q > 0xFFFFFFFFull ? 0xFFFFFFFFul : static_cast<uint32_t>(q);
 }
 
-// N_w: the GROUPS parameter, or one group per particle in {own} + others, capped so every
-// product below fits 32 bits.
-uint32_t group_count(size_t count, int32_t groups) {
-  if (groups > 0) return static_cast<uint32_t>(clamp_to_spec(Param::GROUPS, groups));
-  return count >= kMaxGroupCount ? kMaxGroupCount : static_cast<uint32_t>(count) + 1;
+// N_w: the GROUPS parameter, or (GROUPS 0) the rows of particles the group spans toward the
+// lamp: its farthest and nearest members' S_n by method A, eqs. 14-16, apart, plus one. The SI
+// divides the group into groups of one particle along the radial direction (eqs. 19-22: a body
+// N D long); in a line that is one group per particle, in a blob one per row. N_w <= 255.
+uint8_t group_count(uint16_t v_max, uint16_t v_min, const EstimationParams &p) {
+  if (p.groups > 0) return static_cast<uint8_t>(clamp_to_spec(Param::GROUPS, p.groups));
+  return static_cast<uint8_t>(estimate_direct(v_min, p) - estimate_direct(v_max, p) + 1);
 }
 
 void extremes(uint16_t own, const uint16_t *others, size_t count, uint16_t *v_max,
@@ -86,7 +93,7 @@ __attribute__((noinline)) uint32_t cross_sum(uint16_t v_a, uint16_t v_b) {
 
 uint8_t estimate_direct(uint16_t own, const EstimationParams &p) {
   if (own == 0) return kMaxIndex;
-  if (own >= kFullScale) return 1;
+  // V_x is below full scale (REF_VALUE's range), so this also takes readings of 1023 and above.
   const uint32_t v_x = static_cast<uint32_t>(clamp_to_spec(Param::REF_VALUE, p.ref_value));
   if (own >= v_x) return 1;
   const uint32_t r_x =
@@ -103,21 +110,19 @@ uint8_t estimate_direct(uint16_t own, const EstimationParams &p) {
   return saturate_index(((sqrt_q13(q) >> 13) + 1) / 2);
 }
 
-uint8_t estimate_linear(uint16_t own, const uint16_t *others, size_t count, int32_t groups) {
-  if (count == 0 || others == NULL) return 1;
-  uint16_t v_max, v_min;
+uint8_t estimate_linear(uint16_t own, const uint16_t *others, size_t count,
+                        const EstimationParams &p) {
+  uint16_t v_max, v_min;  // a group of one gives v_max == v_min below
   extremes(own, others, count, &v_max, &v_min);
   if (v_max == v_min) return 1;
-  const uint32_t n_w = group_count(count, groups);
+  const uint32_t n_w = group_count(v_max, v_min, p);
   // floor((V_max - V_n) / ((V_max - V_min) / N_w)) in integers: (V_max - V_n) * N_w < 2^32.
-  uint32_t index = static_cast<uint32_t>(v_max - own) * n_w / static_cast<uint32_t>(v_max - v_min);
-  if (index > n_w - 1) index = n_w - 1;
-  return saturate_index(index);
+  return band(static_cast<uint32_t>(v_max - own) * n_w / static_cast<uint32_t>(v_max - v_min), n_w);
 }
 
-uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count, int32_t groups) {
-  if (count == 0 || others == NULL) return 1;
-  uint16_t v_max, v_min;
+uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count,
+                           const EstimationParams &p) {
+  uint16_t v_max, v_min;  // a group of one gives v_max == v_min below
   extremes(own, others, count, &v_max, &v_min);
   v_max = usable_reading(v_max);
   v_min = usable_reading(v_min);
@@ -131,11 +136,10 @@ uint8_t estimate_nonlinear(uint16_t own, const uint16_t *others, size_t count, i
   // 1.1e-3 wherever S_n is below its ceiling of 255 (the 11-bit roots of eq. 29 as written were
   // off by whole groups for close readings). Factors: N_w (V_max - V_n) < 2^26; each sum of two
   // products stays below 2.8e9 (checked for every pair of readings).
-  const uint32_t n_w = group_count(count, groups);
-  uint32_t index = wide_quotient(n_w * (v_max - own), cross_sum(v_max, v_min), v_max - v_min,
-                                 cross_sum(v_max, own));  // eq. 30
-  if (index > n_w - 1) index = n_w - 1;
-  return saturate_index(index);
+  const uint32_t n_w = group_count(v_max, v_min, p);
+  return band(wide_quotient(n_w * (v_max - own), cross_sum(v_max, v_min), v_max - v_min,
+                            cross_sum(v_max, own)),  // eq. 30
+              n_w);
 }
 
 uint8_t estimate_counting(uint16_t own, const uint16_t *others, size_t count, int32_t tolerance) {
@@ -173,9 +177,9 @@ uint8_t estimate(uint8_t method, uint16_t own, const uint16_t *others, size_t co
     case static_cast<uint8_t>(Method::DIRECT):
       return estimate_direct(own, p);
     case static_cast<uint8_t>(Method::LINEAR):
-      return estimate_linear(own, others, count, p.groups);
+      return estimate_linear(own, others, count, p);
     case static_cast<uint8_t>(Method::NONLINEAR):
-      return estimate_nonlinear(own, others, count, p.groups);
+      return estimate_nonlinear(own, others, count, p);
     case static_cast<uint8_t>(Method::COUNTING):
       return estimate_counting(own, others, count, p.count_tolerance);
     default:

@@ -95,7 +95,8 @@ enum class Param : uint8_t {
   COUNT_TOLERANCE = 8,
   // Intensity broadcasts per particle per estimation round (the paper used 5).
   BROADCAST_REPEATS = 9,
-  // Methods B and C: N_w, number of groups; 0 means one group per particle heard.
+  // Methods B and C: N_w, number of groups; 0 means one group per row of particles toward the lamp
+  // (the rows method A counts between the group's strongest and weakest readings).
   GROUPS = 10,
   // Length of one estimation round; every particle's common start follows it.
   ROUND_MS = 11,

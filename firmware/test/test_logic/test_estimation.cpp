@@ -22,6 +22,13 @@ pb::EstimationParams paper_params() {
   return p;
 }
 
+// The paper's parameters with GROUPS = groups (N_w of methods B and C; 0: one per row).
+pb::EstimationParams with_groups(int groups) {
+  pb::EstimationParams p = paper_params();
+  p.groups = groups;
+  return p;
+}
+
 // Eq. 11 with the SI's calibration (V_x = 980 at r_x = 280 mm, R_R = 1.5 MOhm): the reading of a
 // photocell at distance r_mm from the lamp, unrounded.
 double reading_at(double r_mm) {
@@ -74,22 +81,23 @@ TEST_CASE("linear estimation splits the group's intensity range into equal bands
     for (int j = 0; j < 5; ++j) {
       if (j != i) others[n++] = group[j];
     }
-    // dV = 160: (1000 - V) / 160 floored, the weakest clamped into the last band.
-    CHECK(pb::estimate(kLinear, group[i], others, 4, paper_params()) == expected[i]);
+    // N_w = 5, dV = 160: (1000 - V) / 160 floored, the weakest clamped into the last band.
+    CHECK(pb::estimate(kLinear, group[i], others, 4, with_groups(5)) == expected[i]);
   }
   const uint16_t two_groups[] = {1000, 200};
-  CHECK(pb::estimate_linear(599, two_groups, 2, 2) == 2);
-  CHECK(pb::estimate_linear(601, two_groups, 2, 2) == 1);
+  CHECK(pb::estimate_linear(599, two_groups, 2, with_groups(2)) == 2);
+  CHECK(pb::estimate_linear(601, two_groups, 2, with_groups(2)) == 1);
 }
 
 TEST_CASE("linear and nonlinear estimation give 1 to a lone particle or a uniform group") {
   const uint16_t same[] = {500, 500, 500};
-  CHECK(pb::estimate_linear(500, same, 3, 0) == 1);
-  CHECK(pb::estimate_nonlinear(500, same, 3, 0) == 1);
-  CHECK(pb::estimate_linear(500, NULL, 0, 0) == 1);
-  CHECK(pb::estimate_nonlinear(500, NULL, 0, 0) == 1);
+  const pb::EstimationParams p = paper_params();
+  CHECK(pb::estimate_linear(500, same, 3, p) == 1);
+  CHECK(pb::estimate_nonlinear(500, same, 3, p) == 1);
+  CHECK(pb::estimate_linear(500, NULL, 0, p) == 1);
+  CHECK(pb::estimate_nonlinear(500, NULL, 0, p) == 1);
   const uint16_t clamped_alike[] = {0, 1};  // both read as 1 once clamped
-  CHECK(pb::estimate_nonlinear(0, clamped_alike, 2, 0) == 1);
+  CHECK(pb::estimate_nonlinear(0, clamped_alike, 2, p) == 1);
 }
 
 TEST_CASE("nonlinear estimation recovers positions from an inverse-square field") {
@@ -105,8 +113,51 @@ TEST_CASE("nonlinear estimation recovers positions from an inverse-square field"
       if (j != i) others[m++] = v[j];
     }
     // N_w = 5: floor(5 * i / 4) = 0, 1, 2, 3, 5 -> clamped 4.
-    CHECK(pb::estimate(kNonlinear, v[i], others, 4, paper_params()) == i + 1);
+    CHECK(pb::estimate(kNonlinear, v[i], others, 4, with_groups(5)) == i + 1);
   }
+}
+
+// The reading of a photocell whose particle stands ground_mm along the floor from the point
+// under the lamp, 280 mm below it (the reference height of method A).
+uint16_t reading_on_floor(double ground_mm) {
+  return static_cast<uint16_t>(lround(reading_at(sqrt(ground_mm * ground_mm + 280.0 * 280.0))));
+}
+
+TEST_CASE("with GROUPS 0 methods B and C give one group per row of the group toward the lamp") {
+  // A blob's rows: two particles a few centimetres apart 0.5 m out, two one diameter further,
+  // one two diameters further. Each row expands together: S_n is the row, as method A gives it.
+  const double ground[] = {500, 530, 655, 680, 810};
+  const uint8_t row[] = {1, 1, 2, 2, 3};
+  uint16_t v[5];
+  for (int i = 0; i < 5; ++i) v[i] = reading_on_floor(ground[i]);
+  for (int i = 0; i < 5; ++i) {
+    uint16_t others[4];
+    int m = 0;
+    for (int j = 0; j < 5; ++j) {
+      if (j != i) others[m++] = v[j];
+    }
+    CAPTURE(i);
+    CHECK(pb::estimate(kLinear, v[i], others, 4, paper_params()) == row[i]);
+    CHECK(pb::estimate(kNonlinear, v[i], others, 4, paper_params()) == row[i]);
+  }
+  // In a line, one diameter apart, that is one group per particle: its rank.
+  uint16_t line[6];
+  for (int n = 0; n < 6; ++n) line[n] = reading_on_floor(400 + 155.0 * n);
+  for (int i = 0; i < 6; ++i) {
+    uint16_t others[5];
+    int m = 0;
+    for (int j = 0; j < 6; ++j) {
+      if (j != i) others[m++] = line[j];
+    }
+    CHECK(pb::estimate(kNonlinear, line[i], others, 5, paper_params()) == i + 1);
+  }
+}
+
+// N_w: GROUPS, or the rows between the group's strongest and weakest readings by method A.
+int group_count(uint16_t hi, uint16_t lo, int groups) {
+  if (groups > 0) return groups;
+  const pb::EstimationParams p = paper_params();
+  return pb::estimate_direct(lo, p) - pb::estimate_direct(hi, p) + 1;
 }
 
 // Eqs. 29-30 in double precision: N_w rho, or -1 for a degenerate group.
@@ -119,8 +170,8 @@ double nonlinear_groups(uint16_t own, const uint16_t *others, int count, int gro
   const double a = sqrt((1023.0 - hi) / hi);
   const double b = sqrt((1023.0 - lo) / lo);
   if (b <= a) return -1;
-  const double n_w = groups > 0 ? groups : count + 1;
-  return n_w * (sqrt((1023.0 - own) / own) - a) / (b - a);
+  return group_count(hi > 1023 ? 1023 : hi, lo < 1 ? 1 : lo, groups) *
+         (sqrt((1023.0 - own) / own) - a) / (b - a);
 }
 
 TEST_CASE("nonlinear estimation matches eqs. 29-30 for close readings and 64 groups") {
@@ -138,16 +189,16 @@ TEST_CASE("nonlinear estimation matches eqs. 29-30 for close readings and 64 gro
           for (int j = 0; j < size; ++j) {
             if (j != i) others[n++] = group[j];
           }
-          const int groups_choices[] = {0, 64};
+          const int groups_choices[] = {0, size, 64};
           for (int groups : groups_choices) {
             const double x = nonlinear_groups(group[i], others, n, groups);
-            const int n_w = groups > 0 ? groups : size;
+            const int n_w = group_count(group[size - 1], group[0], groups);
             if (fabs(x - floor(x + 0.5)) < 1e-3) continue;  // on a group boundary
             const int expected = 1 + (x >= n_w - 1 ? n_w - 1 : static_cast<int>(floor(x)));
             CAPTURE(base);
             CAPTURE(spacing);
             CAPTURE(group[i]);
-            CHECK(pb::estimate_nonlinear(group[i], others, n, groups) == expected);
+            CHECK(pb::estimate_nonlinear(group[i], others, n, with_groups(groups)) == expected);
           }
         }
       }
@@ -158,16 +209,17 @@ TEST_CASE("nonlinear estimation matches eqs. 29-30 for close readings and 64 gro
 TEST_CASE("nonlinear estimation takes 1023 as at the lamp and 0 as 1") {
   const uint16_t others[] = {1022, 900};
   // 1023 is the brightest possible reading (root 0), no longer the same as 1022.
-  CHECK(pb::estimate_nonlinear(1023, others, 2, 0) == 1);
+  const pb::EstimationParams p = paper_params();
+  CHECK(pb::estimate_nonlinear(1023, others, 2, p) == 1);
   const uint16_t with_full[] = {1023, 900};
   const double x = nonlinear_groups(1022, with_full, 2, 0);
   CHECK(x > 0.1);
-  CHECK(pb::estimate_nonlinear(1022, with_full, 2, 0) == 1 + static_cast<int>(floor(x)));
+  CHECK(pb::estimate_nonlinear(1022, with_full, 2, p) == 1 + static_cast<int>(floor(x)));
   const uint16_t over[] = {4000, 900};  // above full scale reads as 1023
-  CHECK(pb::estimate_nonlinear(1022, over, 2, 0) == pb::estimate_nonlinear(1022, with_full, 2, 0));
+  CHECK(pb::estimate_nonlinear(1022, over, 2, p) == pb::estimate_nonlinear(1022, with_full, 2, p));
   const uint16_t dark[] = {0, 1};  // no light counts as 1: the farthest
-  CHECK(pb::estimate_nonlinear(500, dark, 2, 3) == 1);
-  CHECK(pb::estimate_nonlinear(0, dark + 1, 1, 3) == 1);
+  CHECK(pb::estimate_nonlinear(500, dark, 2, with_groups(3)) == 1);
+  CHECK(pb::estimate_nonlinear(0, dark + 1, 1, with_groups(3)) == 1);
 }
 
 TEST_CASE("counting estimation counts distinct stronger levels whatever the arrival order") {

@@ -1,13 +1,12 @@
 """Where a swarm's centroid over time comes from: a TRACK.csv, a simulator's CSV in the published
-format (ours writes the same into its run folders), or a folder holding either. Each reader
-returns CentroidSeries in centimetres with what the source says about the lamp and the cycle.
-
-Session logs of a simulated radio will carry world positions (another issue); their reader
-belongs in `read_session_log`, registered in READERS like the others.
+format (ours writes the same into its run folders), a session log of a simulated radio (which
+records the world's truth), or a folder holding any of them. Each reader returns CentroidSeries
+in centimetres with what the source says about the lamp and the cycle.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -17,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.analysis import simcsv, trackfile
+from particlebot.logs import jsonl, world
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
@@ -40,7 +40,7 @@ class CentroidSeries:
     name: str
     path: Path
     kind: str
-    """'track' or 'simulator' (later: 'log')."""
+    """'track', 'simulator' or 'log'."""
     t_s: FloatArray
     x_cm: FloatArray
     y_cm: FloatArray
@@ -164,12 +164,75 @@ def read_simulator_source(path: Path) -> list[CentroidSeries]:
     return [series]
 
 
+CYCLE_START_M = 0.0005
+"""A commanded radius this far above the contracted one marks a cycle under way."""
+
+
 def read_session_log(path: Path) -> list[CentroidSeries]:
-    """Session logs carry no world positions yet; the simulated-radio world will add them."""
-    raise SourceError(
-        f"{path.name}: session logs carry no positions yet (they will once the simulated "
-        "world logs them); track the run's video or give the simulator's CSV"
+    """A session log of a simulated radio: the mean of the particles' centres (the world's
+    truth, logged twice a second) from the run's first START to the STOP after it, the lamp from
+    the scene, the cycle from the commanded radii (how often each particle starts a cycle)."""
+    try:
+        records = [record for _, record in jsonl.read_numbered(path)]
+        track = world.read_world(records)
+    except (jsonl.LogError, world.WorldRecordError) as exc:
+        raise SourceError(f"{path.name}: {exc}") from None
+    if track is None or len(track.body_t) < 2:
+        raise SourceError(
+            f"{path.name}: no positions in this log: only a simulated radio's session "
+            "(virtual://, emulated://) records them; track the run's video instead"
+        )
+    start, stop = _run_span(records)
+    inside = (track.body_t >= start) & (track.body_t <= stop)
+    cx, cy = track.centroid
+    series = CentroidSeries(
+        name=path.name,
+        path=path,
+        kind="log",
+        t_s=track.body_t[inside],
+        x_cm=cx[inside] * 100,
+        y_cm=cy[inside] * 100,
+        valid=np.ones(int(inside.sum()), dtype=bool),
+        y_down=False,
+        lamp_cm=(track.lamp[0] * 100, track.lamp[1] * 100),
+        lamp_from="the log's scene",
     )
+    if math.isfinite(start):
+        series.notes.append("from the run's START to its STOP")
+    radii = (track.radius_t >= start) & (track.radius_t <= stop)
+    cycle = cycle_period(track.radius_t[radii], track.commanded[radii], track.r_min)
+    if cycle is not None:
+        series.cycle_s, series.cycle_from = cycle, "the particles' commanded radii in the log"
+    return [series]
+
+
+def _run_span(records: list[dict[str, object]]) -> tuple[float, float]:
+    """The times of the first START sent and of the first STOP after it (infinite: none)."""
+    start, stop = -math.inf, math.inf
+    for record in records:
+        t = record.get("t")
+        if record.get("kind") != "tx" or not isinstance(t, int | float):
+            continue
+        if record.get("type") == "START" and not math.isfinite(start):
+            start = float(t)
+        elif record.get("type") == "STOP" and math.isfinite(start) and t > start:
+            stop = float(t)
+            break
+    return start, stop
+
+
+def cycle_period(t_s: FloatArray, radii: FloatArray, r_min: float) -> float | None:
+    """The median time between one cycle's start and the next of the same particle (the period
+    of expansion, contraction and pause), from commanded radii sampled at t_s (rows) for each
+    particle (columns); None when no particle started two cycles."""
+    if radii.size == 0 or not math.isfinite(r_min):
+        return None
+    moving = radii > r_min + CYCLE_START_M
+    gaps: list[float] = []
+    for column in moving.T:
+        starts = t_s[1:][column[1:] & ~column[:-1]]
+        gaps.extend(np.diff(starts).tolist())
+    return float(np.median(gaps)) if gaps else None
 
 
 Reader = Callable[[Path], list[CentroidSeries]]
@@ -191,18 +254,23 @@ def load_source(path: Path, accept: frozenset[str] = frozenset()) -> list[Centro
         raise SourceError(f"no such file or folder: {path}")
     if path.is_dir():
         found = []
-        for candidate in sorted(path.glob("*.csv")):
+        for candidate in sorted([*path.glob("*.csv"), *path.glob("*.jsonl")]):
             reader = _reader_for(candidate, accept)
-            if reader is not None:
+            if reader is read_session_log:
+                # A real radio's logs may lie beside a simulated one's: only those with
+                # positions count.
+                with contextlib.suppress(SourceError):
+                    found.extend(reader(candidate))
+            elif reader is not None:
                 found.extend(reader(candidate))
         if not found:
-            raise SourceError(f"{path} holds no TRACK.csv and no simulator CSV")
+            raise SourceError(f"{path} holds no TRACK.csv, simulator CSV or session log")
         return found
     reader = _reader_for(path, accept)
     if reader is None:
         raise SourceError(
             f"{path} is neither a TRACK.csv, a simulator CSV ('Seed, N' first line) nor a "
-            "session log"
+            "session log (.jsonl)"
         )
     return reader(path)
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Self
 
 import cv2
 import numpy as np
 import numpy.typing as npt
+
+from particlebot.closing import ClosedOnExit
 
 Image = npt.NDArray[np.uint8]
 
@@ -23,30 +23,12 @@ def as_image(array: object) -> Image:
     return np.asarray(array, dtype=np.uint8)
 
 
-class _Closing:
-    """`with` closes it."""
-
-    def close(self) -> None:
-        raise NotImplementedError
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        value: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
-
-
 class VideoError(ValueError):
     """A video that cannot be read or written, said in one line."""
 
 
 @dataclass
-class VideoSource(_Closing):
+class VideoSource(ClosedOnExit):
     """An opened video: its size, frame rate and (estimated) length."""
 
     path: Path
@@ -104,7 +86,7 @@ def open_video(path: Path, fps: float | None = None) -> VideoSource:
     return VideoSource(path, capture, float(rate), (width, height), max(count, 0), as_image(first))
 
 
-class VideoWriter(_Closing):
+class VideoWriter(ClosedOnExit):
     """Writes BGR frames of one size to .mp4 or .avi."""
 
     def __init__(self, path: Path, fps: float, size: tuple[int, int]) -> None:

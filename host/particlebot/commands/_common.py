@@ -33,15 +33,17 @@ def opened_swarm(
     fsync: bool = False,
     fleet: Fleet | Path | None = None,
     stepped: bool | None = None,
+    announce_log: bool = True,
 ) -> Iterator[Swarm]:
     """Swarm.open (RadioError, LogError or FleetFileError on failure); closed on the way out,
-    and the log's path printed, so a person always learns where the session went."""
+    and the log's path printed, so a person always learns where the session went (unless
+    announce_log is False: a scratch log nobody keeps)."""
     swarm = Swarm.open(radio, log_dir=log_dir, fsync=fsync, fleet=fleet, stepped=stepped)
     try:
         yield swarm
     finally:
         swarm.close()
-        if swarm.log_path is not None:
+        if swarm.log_path is not None and announce_log:
             print(f"Log: {swarm.log_path}")
 
 

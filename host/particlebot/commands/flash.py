@@ -99,7 +99,7 @@ def run(
     from particlebot.provision.boards import SystemUsb
     from particlebot.provision.flashing import Flasher
     from particlebot.provision.image import ImageError
-    from particlebot.sim.boot import BootError
+    from particlebot.sim.particles.emulated.boot import BootError
 
     try:
         plan = _plan(args)
@@ -155,7 +155,11 @@ def _plan(args: argparse.Namespace) -> FlashPlan:
 
 def _check_image(image: FirmwareImage) -> int | None:
     """Runs the image in the emulator: a particle firmware answers PING with its definition hash."""
-    from particlebot.sim.boot import BootError, EmulatorMissingError, boot_and_ping
+    from particlebot.sim.particles.emulated.boot import (
+        BootError,
+        EmulatorMissingError,
+        boot_and_ping,
+    )
 
     try:
         report = boot_and_ping(image.flash)

@@ -23,12 +23,16 @@ largest; both in mm/s and in % of the contracted diameter per cycle = mm/s x cyc
 the source's own (12 s for the published simulator, whose Tables S3/S4 use it), else 9 s, the
 paper's experiments (T = 3 s + pause 6 s; S6 calls 30 s about 3.5 cycles). Give --cycle-s for
 your own runs: T + t_p = T (N + 1) / 2 for a wave of N. SOURCE: a TRACK.csv (particlebot track), a
-simulator CSV in the published format ('Seed, N' first line) or a run folder holding one."""
+simulator CSV in the published format ('Seed, N' first line), a session log of a simulated radio
+(its particles' true centres from START to STOP, its cycle from their commanded radii) or a
+folder holding any of them."""
 
 
 def add_arguments(stats: argparse.ArgumentParser) -> None:
     stats.description = DESCRIPTION
-    stats.add_argument("sources", nargs="+", metavar="SOURCE", help="TRACK.csv, CSV or folder")
+    stats.add_argument(
+        "sources", nargs="+", metavar="SOURCE", help="TRACK.csv, CSV, session log or folder"
+    )
     stats.add_argument(
         "--interval-s", type=float, default=30.0, help="sampling interval (30, as in S6)"
     )

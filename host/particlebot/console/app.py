@@ -16,7 +16,7 @@ from rich.text import Text
 from textual import events
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Vertical, VerticalScroll
+from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.css.query import NoMatches
 from textual.screen import ModalScreen
 from textual.widgets import DataTable, Footer, Input, RichLog, Static
@@ -74,6 +74,12 @@ CELL_PADDING = 2
 BELOW_TABLE = 1 + 8 + 1 + 1
 # Above it: the status bar.
 ABOVE_TABLE = 2
+MAP_WIDTH = 42
+"""Columns of the top view beside the table (a simulated swarm's world, when there is one)."""
+MAP_HEIGHT = 14
+
+WorldMap = Callable[[int, int], Text]
+"""world_map(width, height) -> the top view of the swarm in that many characters."""
 # Messages kept for the pane (the session log keeps them all).
 MESSAGES_KEPT = 1000
 
@@ -341,6 +347,8 @@ class ConsoleApp(App[int]):
     }
     #command { height: 1; border: none; padding: 0 1; }
     #command:focus { background: $boost; }
+    #upper { height: auto; }
+    #map { width: 42; height: 14; padding: 0 1; border-left: solid $primary; }
     """
     # The keys that open the command line are priority bindings, handled as they arrive: keys
     # typed right after them (or pasted, or sent by tmux) then reach the command line, not the
@@ -369,7 +377,9 @@ class ConsoleApp(App[int]):
         linger_s: float = 3.0,
         refresh_s: float = 0.25,
         read_only: bool = False,
+        world_map: WorldMap | None = None,
     ) -> None:
+        """world_map: draws a top view of the swarm beside the table (a simulation's truth)."""
         super().__init__()
         self.swarm = swarm
         self.radio_name = radio_name or swarm.url
@@ -381,6 +391,7 @@ class ConsoleApp(App[int]):
         self.linger_s = linger_s
         self.refresh_s = refresh_s
         self.read_only = read_only
+        self.world_map = world_map
         self._rows: dict[str, dict[str, Text]] = {}
         """The cells each row shows now, by row key: only those that changed are redrawn."""
         self._columns: list[Column] = []
@@ -391,7 +402,12 @@ class ConsoleApp(App[int]):
 
     def compose(self) -> ComposeResult:
         yield Static(id="status")
-        yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
+        if self.world_map is None:
+            yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
+        else:
+            with Horizontal(id="upper"):
+                yield DataTable(id="table", cursor_type="row", zebra_stripes=True)
+                yield Static(id="map")
         yield MessageLog(id="messages")
         # Not select_on_focus: a prefilled command is completed, not typed over.
         yield CommandLine(
@@ -495,6 +511,8 @@ class ConsoleApp(App[int]):
         return text
 
     def _fit_columns(self, width: int) -> None:
+        if self.world_map is not None:
+            width -= MAP_WIDTH
         columns = visible_columns(width)
         flags = flags_width(columns, width)
         if (columns, flags) == (self._columns, self._flags_width):
@@ -520,6 +538,9 @@ class ConsoleApp(App[int]):
         model = self.model
         now = model.clock()
         self.query_one("#status", Static).update(self._status_text())
+        if self.world_map is not None:
+            # Inside the border and the padding.
+            self.query_one("#map", Static).update(self.world_map(MAP_WIDTH - 3, MAP_HEIGHT))
         table = self.query_one("#table", DataTable)
         added = False
         rows = model.rows()

@@ -351,11 +351,11 @@ def check_radio_url(url: str) -> None:
     (baud, ...) are checked when it opens."""
     parsed = parse_radio_url(url)
     if parsed.scheme == "virtual":
-        from particlebot.radio.virtual import swarm_config_from_url as virtual_config
+        from particlebot.radio.virtual import virtual_config
 
         virtual_config(parsed)
     elif parsed.scheme == "emulated":
-        from particlebot.radio.emulated import swarm_config_from_url as emulated_config
+        from particlebot.radio.emulated import emulated_config
 
         emulated_config(parsed)
     if parsed.scheme in SIMULATED:

@@ -13,13 +13,19 @@ import logging
 import os
 import subprocess
 import threading
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Self
 
-from particlebot.protocol.generated import FRAME_OVERHEAD, MAX_PAYLOAD, Method, Status
+from particlebot.closing import ClosedOnExit
+from particlebot.protocol.generated import (
+    FRAME_OVERHEAD,
+    MAX_PAYLOAD,
+    Method,
+    Param,
+    ParamResult,
+    Status,
+)
 
 SENSOR_COUNT = 6
 EEPROM_SIZE = 1024
@@ -54,6 +60,16 @@ def _declare(lib: ctypes.CDLL) -> None:
         "pb_particle_set_adc": (None, [handle, _U16P]),
         "pb_particle_receive": (None, [handle, _U8P, ctypes.c_size_t]),
         "pb_particle_tick": (None, [handle, ctypes.c_uint32]),
+        "pb_particles_tick": (
+            None,
+            [
+                ctypes.POINTER(handle),
+                ctypes.c_size_t,
+                ctypes.c_uint32,
+                ctypes.POINTER(ctypes.c_uint32),
+                _U8P,
+            ],
+        ),
         "pb_particle_transmit": (ctypes.c_size_t, [handle, _U8P, ctypes.c_size_t]),
         "pb_inter_frame_gap_ms": (ctypes.c_uint8, []),
         "pb_particle_id": (ctypes.c_uint8, [handle]),
@@ -157,7 +173,7 @@ def _u16_array(values: Sequence[int]) -> ctypes.Array[ctypes.c_uint16]:
     return (ctypes.c_uint16 * len(values))(*values)
 
 
-class NativeParticle:
+class NativeParticle(ClosedOnExit):
     """One particle: the firmware's Particle class with a RAM EEPROM and a simulated ADC.
 
     Time is whatever the caller says: tick(now_ms) advances the logic to now_ms, drawing ADC
@@ -176,6 +192,7 @@ class NativeParticle:
             raise MemoryError("pb_particle_new failed")
         self._handle: int | None = handle
         self._now_ms = 0
+        self._frame = (ctypes.c_uint8 * _MAX_FRAME)()
 
     def _h(self) -> int:
         if self._handle is None:
@@ -186,17 +203,6 @@ class NativeParticle:
         if self._handle is not None:
             self._lib.pb_particle_free(self._handle)
             self._handle = None
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     def __del__(self) -> None:
         # Only when the interpreter is not tearing the module down already.
@@ -232,9 +238,8 @@ class NativeParticle:
     def transmit_frame(self) -> bytes:
         """The next frame queued for Serial1 (b"" when none), removed from the queue: what the
         firmware hands its serial port at once, before a silence of inter_frame_gap_ms()."""
-        buffer = (ctypes.c_uint8 * _MAX_FRAME)()
-        n = self._lib.pb_particle_transmit(self._h(), buffer, _MAX_FRAME)
-        return bytes(buffer[:n])
+        n = self._lib.pb_particle_transmit(self._h(), self._frame, _MAX_FRAME)
+        return bytes(self._frame[:n]) if n else b""
 
     def transmit(self, limit: int = _TX_CHUNK) -> bytes:
         """Everything queued for Serial1 (at most limit bytes), removed from the queue."""
@@ -276,6 +281,26 @@ class NativeParticle:
         buffer = (ctypes.c_uint8 * EEPROM_SIZE)()
         n = self._lib.pb_particle_eeprom(self._h(), buffer, len(buffer))
         return bytes(buffer[:n])
+
+
+class NativeBatch:
+    """Ticks many particles in one call (pb_particles_tick) and reads each one's radius and
+    whether it has a frame to send: what a swarm needs every tick, without three calls per
+    particle. The particles' own now_ms is not updated by it."""
+
+    def __init__(self, particles: Sequence[NativeParticle]) -> None:
+        self._lib = load_library()
+        self.count = len(particles)
+        self._handles = (ctypes.c_void_p * self.count)(*[p._h() for p in particles])
+        self.radius_um = (ctypes.c_uint32 * self.count)()
+        """Each particle's radius after the last tick()."""
+        self.tx_waiting = (ctypes.c_uint8 * self.count)()
+        """1 where a particle had a frame to send after the last tick()."""
+
+    def tick(self, now_ms: int) -> None:
+        self._lib.pb_particles_tick(
+            self._handles, self.count, now_ms & 0xFFFFFFFF, self.radius_um, self.tx_waiting
+        )
 
 
 # ---- pure functions ------------------------------------------------------------------------------
@@ -380,10 +405,28 @@ def parse_stream(data: bytes | bytearray) -> tuple[list[ParsedFrame], ParseCount
 # ---- firmware constants and the epoch plan, for the vectorised model of the firmware ------------
 
 _MODEL_SIGNATURES: dict[str, tuple[object, list[object]]] = {
+    "pb_settings_image": (
+        ctypes.c_size_t,
+        [
+            ctypes.c_uint8,
+            _U8P,
+            ctypes.POINTER(ctypes.c_int32),
+            ctypes.c_size_t,
+            _U8P,
+            ctypes.c_size_t,
+            ctypes.POINTER(ctypes.c_size_t),
+            _U8P,
+        ],
+    ),
+    "pb_frame_timeout_ms": (ctypes.c_uint16, []),
+    "pb_ping_slot_ms": (ctypes.c_uint16, []),
+    "pb_ping_slots_unknown": (ctypes.c_uint8, []),
+    "pb_servo_cal_points": (ctypes.c_uint8, []),
+    "pb_servo_pulse_min_us": (ctypes.c_uint16, []),
+    "pb_servo_pulse_max_us": (ctypes.c_uint16, []),
     "pb_servo_step_ms": (ctypes.c_uint16, []),
     "pb_adc_full_scale": (ctypes.c_uint16, []),
     "pb_s_n_max": (ctypes.c_uint8, []),
-    "pb_group_count_max": (ctypes.c_uint32, []),
     "pb_plan_epoch": (
         None,
         [
@@ -413,23 +456,66 @@ def _model_library() -> ctypes.CDLL:
 
 @dataclass(frozen=True)
 class FirmwareConstants:
-    """Values the firmware defines outside the protocol that a model of it needs."""
+    """Values the firmware defines outside the protocol that a model or a simulation of it
+    needs."""
 
     servo_step_ms: int  # one servo step; a cycle of cycle_steps steps lasts T
     adc_full_scale: int  # highest reading; a sensor reading it or 0 is left out as faulty
     s_n_max: int  # every estimator saturates S_n here
-    group_count_max: int  # cap on N_w of methods B and C with GROUPS = 0
+    frame_timeout_ms: int  # a partial frame this old is dropped by the particle's parser
+    ping_slot_ms: int  # a broadcast request is answered in a random slot of this length...
+    ping_slots_unknown: int  # ...one of this many while the particle knows no group size
+    inter_frame_gap_ms: int  # silence on Serial1 after each frame (one RF packet per frame)
+    servo_cal_points: int  # points of the servo table SERVO_CAL_0..
+    servo_pulse_min_us: int  # the pulses a servo may be given
+    servo_pulse_max_us: int
+
+
+_constants: FirmwareConstants | None = None
 
 
 def firmware_constants() -> FirmwareConstants:
-    """The constants the library was built with."""
+    """The constants the library was built with (read once)."""
+    global _constants
+    if _constants is None:
+        lib = _model_library()
+        _constants = FirmwareConstants(
+            servo_step_ms=int(lib.pb_servo_step_ms()),
+            adc_full_scale=int(lib.pb_adc_full_scale()),
+            s_n_max=int(lib.pb_s_n_max()),
+            frame_timeout_ms=int(lib.pb_frame_timeout_ms()),
+            ping_slot_ms=int(lib.pb_ping_slot_ms()),
+            ping_slots_unknown=int(lib.pb_ping_slots_unknown()),
+            inter_frame_gap_ms=int(lib.pb_inter_frame_gap_ms()),
+            servo_cal_points=int(lib.pb_servo_cal_points()),
+            servo_pulse_min_us=int(lib.pb_servo_pulse_min_us()),
+            servo_pulse_max_us=int(lib.pb_servo_pulse_max_us()),
+        )
+    return _constants
+
+
+def settings_image(particle_id: int, params: Mapping[Param, int] | None = None) -> bytes:
+    """The EEPROM a particle with this id and these parameter values (the rest their defaults)
+    boots from, written by the firmware's own settings code: EEPROM_SIZE bytes. ValueError names
+    a value the firmware refuses (as SET_PARAM would) or an id outside 1..253."""
     lib = _model_library()
-    return FirmwareConstants(
-        servo_step_ms=int(lib.pb_servo_step_ms()),
-        adc_full_scale=int(lib.pb_adc_full_scale()),
-        s_n_max=int(lib.pb_s_n_max()),
-        group_count_max=int(lib.pb_group_count_max()),
+    items = list((params or {}).items())
+    ids = (ctypes.c_uint8 * max(1, len(items)))(*[int(p) for p, _ in items])
+    values = (ctypes.c_int32 * max(1, len(items)))(*[int(v) for _, v in items])
+    out = (ctypes.c_uint8 * EEPROM_SIZE)()
+    refused = ctypes.c_size_t(0)
+    result = ctypes.c_uint8(0)
+    n = lib.pb_settings_image(
+        particle_id, ids, values, len(items), out, EEPROM_SIZE, refused, result
     )
+    if n == 0:
+        if refused.value >= len(items):
+            raise ValueError(f"particle id {particle_id} is outside 1..253")
+        param, value = items[refused.value]
+        raise ValueError(
+            f"{Param(param).name}={value} refused by the firmware: {ParamResult(result.value).name}"
+        )
+    return bytes(out[:n])
 
 
 @dataclass(frozen=True)

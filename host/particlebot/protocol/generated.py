@@ -87,7 +87,9 @@ class Param(enum.IntEnum):
     BROADCAST_REPEATS = 9
     """Intensity broadcasts per particle per estimation round (the paper used 5)."""
     GROUPS = 10
-    """Methods B and C: N_w, number of groups; 0 means one group per particle heard."""
+    """Methods B and C: N_w, number of groups; 0 means one group per row of particles toward the
+    lamp (the rows method A counts between the group's strongest and weakest readings).
+    """
     ROUND_MS = 11
     """Length of one estimation round; every particle's common start follows it."""
     STATUS_PERIOD_MS = 12
@@ -246,7 +248,8 @@ PARAM_SPECS: dict[Param, ParamSpec] = {
         0,
         0,
         64,
-        "Methods B and C: N_w, number of groups; 0 means one group per particle heard.",
+        "Methods B and C: N_w, number of groups; 0 means one group per row of particles toward "
+        "the lamp (the rows method A counts between the group's strongest and weakest readings).",
     ),
     Param.ROUND_MS: ParamSpec(
         3000,

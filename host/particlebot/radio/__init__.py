@@ -10,10 +10,10 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
-from types import TracebackType
 from typing import Self
 from urllib.parse import parse_qsl, urlsplit
 
+from particlebot.closing import ClosedOnExit
 from particlebot.options import ANY, SPEED, Bounds, OptionError, parse_float, parse_int
 
 __all__ = [
@@ -202,7 +202,7 @@ def open_radio(url: str, *, caller_steps: bool = False) -> Radio:
     return FaultyRadio(radio, faults) if faults.any else radio
 
 
-class Radio(ABC):
+class Radio(ClosedOnExit, ABC):
     """A base-station radio: broadcasts application frames and hands over what it hears.
 
     Backends report link changes (a port that vanished and came back) to link listeners instead
@@ -261,17 +261,6 @@ class Radio(ABC):
         event = LinkEvent(state=state, message=message, time=self.now())
         for listener in listeners:
             listener(event)
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.url!r})"

@@ -1,18 +1,45 @@
-"""What the radios of simulated swarms (virtual://, emulated://) share: URL options, a queue."""
+"""What the radios of simulated swarms (virtual://, emulated://) share: the URL's options (the
+scenario, the lamp, the air's faults, the photocells), and the base station's node on the swarm's
+air, handing packets over through a queue."""
 
 from __future__ import annotations
 
 import queue
-from abc import abstractmethod
-from typing import Generic, Protocol, TypeVar
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Self
 
-from particlebot.options import POSITIVE, Bounds, OptionError, parse_float
-from particlebot.radio import InvalidRadioUrlError, LinkState, Packet, Radio, RadioError, RadioUrl
-from particlebot.radio.faults import LinkFaults
-from particlebot.sim.world.light import Lamp
+from particlebot.options import NON_NEGATIVE, POSITIVE, SWITCH, Bounds, OptionError, parse_float
+from particlebot.radio import (
+    InvalidRadioUrlError,
+    LinkState,
+    Packet,
+    Radio,
+    RadioError,
+    RadioUrl,
+)
+from particlebot.radio.faults import FAULT_OPTIONS, SIMULATION_OPTIONS, faults_from_url
+from particlebot.sim.scenarios import presets
+from particlebot.sim.scenarios.scenario import LampSpec, PlacementKind, Scenario, ScenarioError
+from particlebot.sim.swarm.config import Level, SwarmConfig
+from particlebot.sim.swarm.swarm import SimSwarm, TruthListener
 from particlebot.sim.world.photocells import MAX_SPREAD
 
 PHOTOCELL_SPREAD = Bounds(minimum=0, maximum=MAX_SPREAD)
+SHAPE_OPTIONS = frozenset({"lamp", "start", "spacing"})
+"""Options that shape a line or a blob; a scenario file places everything itself."""
+OPTIONS = frozenset(
+    {
+        *SHAPE_OPTIONS,
+        "speed",
+        "kinematics",
+        "noise",
+        "photocell_spread",
+        *FAULT_OPTIONS,
+        *SIMULATION_OPTIONS,
+    }
+)
+"""What both simulated radios take; emulated:// adds the image's own (elf, base_baud, buffer)."""
 
 
 def parse_count(url: RadioUrl, default: int, maximum: int) -> int:
@@ -29,10 +56,10 @@ def parse_count(url: RadioUrl, default: int, maximum: int) -> int:
     return count
 
 
-def parse_lamp(url: RadioUrl) -> Lamp:
-    """lamp=X,Y,H in metres, or the default lamp."""
+def parse_lamp(url: RadioUrl) -> LampSpec:
+    """lamp=X,Y,H in metres (H above the photocells), or the default lamp."""
     if "lamp" not in url.options:
-        return Lamp()
+        return LampSpec()
     parts = url.options["lamp"].split(",")
     try:
         if len(parts) != 3:
@@ -43,66 +70,134 @@ def parse_lamp(url: RadioUrl) -> Lamp:
         raise InvalidRadioUrlError(
             f"{url.text}: lamp=X,Y,H in metres, H above the photocells, e.g. lamp=0,0,0.28"
         ) from None
-    return Lamp(x, y, height)
+    return LampSpec(x, y, height)
 
 
-def parse_photocell_spread(url: RadioUrl) -> float:
-    """photocell_spread=S: every simulated photocell its own gamma (1 +- S) and resistance, as
-    real CdS cells have (something to calibrate); 0, the default, makes them all ideal."""
-    return url.get_float("photocell_spread", 0.0, PHOTOCELL_SPREAD)
+def parse_scenario(url: RadioUrl, default_count: int, maximum: int) -> Scenario:
+    """scenario=line (the default: a line away from the lamp, shaped by start=, spacing= and
+    lamp=), blob (an SI Algorithm-5 blob start= metres from the lamp, 1.5 by default) or the
+    path of a scenario file (TOML, or the published .cfg), which places everything itself: the
+    number after scheme:// then overrides its particles."""
+    name = url.options.get("scenario", "line").strip()
+    seed = url.get_int("seed", 1, NON_NEGATIVE)
+    if name.lower() in presets.NAMES:
+        count = parse_count(url, default_count, maximum)
+        lamp = parse_lamp(url)
+        if name.lower() == "blob":
+            if "spacing" in url.options:
+                raise InvalidRadioUrlError(
+                    f"{url.text}: spacing= shapes a line; a blob's particles touch"
+                )
+            start = url.get_float("start", presets.BLOB_START_M, NON_NEGATIVE)
+            return presets.blob(count, start=start, lamp=lamp, seed=seed)
+        return presets.line(
+            count,
+            start=url.get_float("start", presets.LINE_START_M, NON_NEGATIVE),
+            spacing=url.get_float("spacing", presets.CONTRACTED_SPACING_M, POSITIVE),
+            lamp=lamp,
+            seed=seed,
+        )
+    shaped = sorted(SHAPE_OPTIONS & set(url.options))
+    if shaped:
+        raise InvalidRadioUrlError(
+            f"{url.text}: {', '.join(shaped)} shape a line or a blob; the scenario file {name} "
+            "places the particles and the lamp itself"
+        )
+    try:
+        scenario = presets.read_file(Path(name))
+    except ScenarioError as exc:
+        raise InvalidRadioUrlError(f"{url.text}: scenario {exc}") from None
+    if url.target:
+        count = parse_count(url, default_count, maximum)
+        if scenario.swarm.placement is PlacementKind.FILE:
+            raise InvalidRadioUrlError(
+                f"{url.text}: the scenario file lists its particles' places: leave out the "
+                f"number ({url.scheme}://?scenario={name})"
+            )
+        scenario = presets.with_particles(scenario, count)
+    elif not 1 <= scenario.swarm.particles <= maximum:
+        raise InvalidRadioUrlError(
+            f"{url.text}: {url.scheme}:// runs 1..{maximum} particles, the scenario has "
+            f"{scenario.swarm.particles}"
+        )
+    if "seed" in url.options:
+        scenario = replace(scenario, seed=seed)
+    return scenario
 
 
-class SimulatedSwarm(Protocol):
-    """What a SwarmRadio needs of particlebot.virtual.swarm.VirtualSwarm and
-    particlebot.sim.swarm.EmulatedSwarm."""
+def swarm_config_from_url(
+    url: RadioUrl,
+    level: Level,
+    *,
+    default_count: int,
+    maximum: int,
+    extra: frozenset[str] = frozenset(),
+    **options: Any,
+) -> SwarmConfig:
+    """The swarm a simulated radio's URL describes (InvalidRadioUrlError says what is wrong):
+    scenario=line|blob|PATH with start=, spacing=, lamp=, seed=; the air's loss= and delay_ms=;
+    photocell_spread=, noise=, kinematics=0|1. options: the level's own settings."""
+    url.check_options(set(OPTIONS | extra))
+    scenario = parse_scenario(url, default_count, maximum)
+    faults = faults_from_url(url)
+    return SwarmConfig(
+        scenario=scenario,
+        level=level,
+        seed=url.get_int("seed", 1, NON_NEGATIVE),
+        loss=faults.loss,
+        delay_us=faults.delay_s * 1_000_000,
+        photocell_spread=url.get_float("photocell_spread", 0.0, PHOTOCELL_SPREAD),
+        noise=url.get_float("noise", 0.0, NON_NEGATIVE),
+        kinematics=url.get_int("kinematics", 1, SWITCH) != 0,
+        keep_history=False,
+        **options,
+    )
 
-    def node_name(self, node: int, /) -> str: ...
 
-    def epoch(self, sim_s: float | None = None, /) -> float: ...
-
-    def send_from_base(self, data: bytes, /) -> None: ...
-
-    def start(self, speed: float = 1.0) -> None: ...
-
-    def stop(self) -> None: ...
-
-    def run_for(self, seconds: float, /) -> None: ...
-
-    @property
-    def error(self) -> BaseException | None: ...
-
-
-SwarmT = TypeVar("SwarmT", bound=SimulatedSwarm)
-
-
-class SwarmRadio(Radio, Generic[SwarmT]):
+class SwarmRadio(Radio):
     """The base station's radio on a simulated swarm's air. The simulation's thread hands packets
     over through a queue; the clock is the simulation's, so the console's ages and timeouts
     follow simulated time when it runs faster or slower than real time."""
 
     restart_advice = "open it again"
     """What to do once the simulation has failed (a backend names what to rebuild)."""
-    faults_on_link = False  # the simulation models loss on its air
+    faults_on_link = False  # the simulation models loss and delay on its air
 
     def __init__(
         self,
-        swarm: SwarmT,
+        swarm: SimSwarm,
         *,
         url: str,
         speed: float | None = None,
-        link_faults: LinkFaults | None = None,
+        owns_swarm: bool = False,
     ) -> None:
         """speed: step the swarm on its own thread at this pace (else the caller steps it).
-        link_faults: delay (or loss) between the base station and its radio."""
+        owns_swarm: close() ends the swarm too (its particles' processes, for emulated ones)."""
         super().__init__(url)
         self.swarm = swarm
         self.speed = speed
-        self.link_faults = link_faults
+        self._owns_swarm = owns_swarm
         self._packets: queue.Queue[Packet] = queue.Queue()
         self._owns_thread = speed is not None
-        self._connect()
+        swarm.add_base_listener(self._deliver)
         if speed is not None:
             self.swarm.start(speed)
+
+    @classmethod
+    def open_swarm(cls, config: SwarmConfig, url: RadioUrl) -> Self:
+        """The radio on a new swarm of config, paced as the URL says (or stepped by the caller)."""
+        speed = url.get_speed()  # checked either way
+        try:
+            swarm = SimSwarm(config)
+        except ScenarioError as exc:
+            raise InvalidRadioUrlError(f"{url.text}: scenario {exc}") from None
+        except (OSError, ImportError, RuntimeError) as exc:
+            raise RadioError(cls.missing_advice(exc)) from exc
+        return cls(swarm, url=url.text, speed=None if url.caller_steps else speed, owns_swarm=True)
+
+    @staticmethod
+    def missing_advice(exc: BaseException) -> str:
+        return f"The simulated swarm cannot start ({exc})"
 
     @property
     def stepped_by_caller(self) -> bool:
@@ -121,24 +216,17 @@ class SwarmRadio(Radio, Generic[SwarmT]):
         if self._owns_thread:
             raise RuntimeError("the simulation steps on its own thread")
         self._check()
-        end = self.now() + seconds
-        faults = self.link_faults
-        # Delayed sends leave when they are due, not at the end of the step.
-        while faults is not None and (due := faults.next_send_due()) is not None and due < end:
-            self.swarm.run_for(max(0.0, due - self.now()))
-            # The simulation moves in steps of its own: within one of them counts as due.
-            faults.release_sends(due, self.swarm.send_from_base)
-        self.swarm.run_for(max(0.0, end - self.now()))
+        self.swarm.run_for(seconds)
 
-    @abstractmethod
-    def _connect(self) -> None:
-        """Has the swarm hand the base station's packets to _deliver."""
+    def add_truth_listener(self, listener: TruthListener) -> None:
+        """listener(record, epoch_s): the world's truth, stamped on this radio's clock."""
+        swarm = self.swarm
+        self.swarm.add_truth_listener(lambda record, t: listener(record, swarm.epoch(t)))
 
     def _deliver(self, source: int, data: bytes, at: float) -> None:
-        packet = Packet(data=data, source=self.swarm.node_name(source), time=self.swarm.epoch(at))
-        passed = packet if self.link_faults is None else self.link_faults.incoming(packet)
-        if passed is not None:
-            self._packets.put(passed)
+        self._packets.put(
+            Packet(data=data, source=self.swarm.node_name(source), time=self.swarm.epoch(at))
+        )
 
     def _check(self) -> None:
         """Raises RadioError once the simulation's thread has failed: without it nothing more will
@@ -153,23 +241,10 @@ class SwarmRadio(Radio, Generic[SwarmT]):
 
     def send(self, data: bytes) -> None:
         self._check()
-        if self.link_faults is None:
-            self.swarm.send_from_base(data)
-        else:
-            self.link_faults.outgoing(data, self.now(), self.swarm.send_from_base)
+        self.swarm.send_from_base(data)
 
     def receive(self, timeout: float | None = None) -> Packet | None:
         self._check()
-        faults = self.link_faults
-        if faults is not None:
-            faults.release_sends(self.now(), self.swarm.send_from_base)
-            held = faults.due_packet(self.now())
-            if held is not None:
-                return held
-            if faults.next_due() is not None:
-                # On the simulation's clock, which may run faster than the wall's: look again
-                # soon rather than sleep through what falls due.
-                timeout = 0.005 if timeout is None else min(timeout, 0.005)
         try:
             return self._packets.get(timeout=timeout)
         except queue.Empty:
@@ -177,6 +252,8 @@ class SwarmRadio(Radio, Generic[SwarmT]):
             return None
 
     def close(self) -> None:
-        if self._owns_thread:
+        if self._owns_swarm:
+            self.swarm.close()  # its thread first, then the particles
+        elif self._owns_thread:
             self.swarm.stop()
         super().close()

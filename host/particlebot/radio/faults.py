@@ -3,15 +3,13 @@
 So that a script can rehearse a trial under loss before it runs on hardware, the same options
 mean the same on every radio, as near as each can honour them:
 
-- emulated://: the emulated 802.15.4 medium loses and delays every copy of every packet at every
-  receiver, particles' radios included (particlebot.sim.medium).
-- virtual://: loss drops every copy at every receiver on the virtual air too; delay holds packets
-  between the base station and its radio (the virtual air has no delay of its own).
+- virtual://, emulated://: the simulated 802.15.4 medium (particlebot.sim.air) loses and delays
+  every copy of every packet at every receiver, particles' radios included.
 - serial://, xbee://: real air has the loss it has; these add loss and delay on top, between the
   host and its radio, to see how a trial copes with a worse link.
-- seed makes a simulated radio's losses (and its particles) the same each time. scenario is the
-  name of a placement of the particles: only `line` (the one that exists) is accepted until the
-  2-D world brings placements, lamps and obstacles of its own.
+- seed makes a simulated radio's losses (and its particles, and a line's or blob's placement) the
+  same each time. scenario says where the simulated particles, the lamp and the obstacles are:
+  line, blob, or a scenario file (particlebot.radio._simulated.parse_scenario).
 """
 
 from __future__ import annotations
@@ -25,7 +23,7 @@ from dataclasses import dataclass
 from typing import Self
 
 from particlebot.options import NON_NEGATIVE, Bounds
-from particlebot.radio import InvalidRadioUrlError, LinkEvent, Packet, Radio, RadioUrl
+from particlebot.radio import LinkEvent, Packet, Radio, RadioUrl
 
 FAULT_OPTIONS = frozenset({"loss", "delay_ms"})
 """What every radio that sends takes."""
@@ -33,8 +31,6 @@ SIMULATION_OPTIONS = frozenset({"seed", "scenario"})
 """What simulated radios take on top."""
 LOSS = Bounds(minimum=0, below=1)
 """A loss of 1 would leave nothing to hear: no command could ever be confirmed."""
-SCENARIOS = ("line",)
-"""Placements of simulated particles that exist today."""
 
 
 @dataclass(frozen=True)
@@ -54,18 +50,6 @@ def faults_from_url(url: RadioUrl) -> Faults:
         loss=url.get_float("loss", 0.0, LOSS),
         delay_s=url.get_float("delay_ms", 0.0, NON_NEGATIVE) / 1000,
     )
-
-
-def scenario_from_url(url: RadioUrl) -> str:
-    """scenario=line, the only placement there is yet; any other name is refused, saying so."""
-    name = url.options.get("scenario", "line").strip().lower()
-    if name not in SCENARIOS:
-        raise InvalidRadioUrlError(
-            f"{url.text}: scenario '{name}' does not exist: {url.scheme}:// places its particles "
-            f"in a line from the lamp (scenario=line, shaped by start=, spacing= and lamp=); "
-            "the name is kept for the placements the 2-D world will bring"
-        )
-    return name
 
 
 class LinkFaults:

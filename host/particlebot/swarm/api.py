@@ -145,6 +145,9 @@ class Swarm:
                 path = default_log_path(folder) if log_name is None else folder / log_name
                 self.log = JsonlWriter(path, radio=radio.url, fsync=fsync, clock=radio.now)
                 self.session.add_listener(self.log)
+                if isinstance(radio, SwarmRadio):
+                    # A simulation knows what no radio can say: where every body is.
+                    radio.add_truth_listener(self.log.write)
             self.tracker = SwarmTracker(
                 self.session,
                 radio.now,

@@ -1,0 +1,1 @@
+"""Tests of the 2-D physical world: contacts, magnets, friction, servo, light, obstacles."""

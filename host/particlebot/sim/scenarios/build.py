@@ -102,9 +102,11 @@ def place_swarm(scenario: Scenario) -> Placement:
     return placement
 
 
-def build_world(scenario: Scenario) -> Built:
-    """The World a scenario describes, with its controller bound; ScenarioError (one line that
-    names the file, line and key) when the scenario cannot be put down as written."""
+def build_world(scenario: Scenario, controller: Controller | None = None) -> Built:
+    """The World a scenario describes, with its controller bound (`controller`, when given,
+    instead of the scenario's: the swarm of firmware particles drives the world with theirs);
+    ScenarioError (one line that names the file, line and key) when the scenario cannot be put
+    down as written."""
     params = scenario.physics
     placement = place_swarm(scenario)
     xy = placement.xy
@@ -155,7 +157,7 @@ def build_world(scenario: Scenario) -> Built:
         world = World(
             xy[:, 0],
             xy[:, 1],
-            controller=controller_for(scenario),
+            controller=controller if controller is not None else controller_for(scenario),
             params=scenario.physics,
             arena=arena,
             lamp=lamp,

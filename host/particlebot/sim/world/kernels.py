@@ -302,48 +302,58 @@ def _kinematics(
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _law(
+    j: int, dx: float, dy: float, d2: float, c: float, vxi: float, vyi: float, magi: float,
+    vel_old: FloatArray, body: FloatArray, prm: FloatArray,
+) -> tuple[float, float, float, float, bool]:  # fmt: skip
+    """Force on i from j (rel = pj - pi at squared distance d2 > 0, contact distance c), for a
+    pair within reach: contact (spring, dashpot, shear) when they overlap, else the magnets.
+    Returns f, its contact and attraction magnitudes, and whether they touch (overlap, or a gap
+    below the magnets' lock)."""
+    d = math.sqrt(d2)
+    nx = dx / d
+    ny = dy / d
+    if d < c:
+        px, py = _contact(
+            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
+        )
+        return px, py, math.sqrt(px * px + py * py), 0.0, True
+    strength = magi * body[B_MAG, j]
+    if strength > 0.0:
+        attract = _magnet(d - c, strength, prm)
+        return attract * nx, attract * ny, 0.0, attract, d - c < prm[P_TOUCH_GAP]
+    return 0.0, 0.0, 0.0, 0.0, d - c < prm[P_TOUCH_GAP]
+
+
+@numba.njit(cache=True, inline="always")
+def _join(i: int, j: int, kind_i: int, flags: ByteArray) -> None:
+    """A free particle touching a member is marked to join the robot."""
+    kind_j = flags[F_KIND, j]
+    if kind_i == FREE and kind_j == MEMBER:
+        flags[F_JOINED, i] = 1
+    elif kind_i == MEMBER and kind_j == FREE:
+        flags[F_JOINED, j] = 1
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _pair(
     i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
     magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
 ) -> tuple[float, float, float, float]:  # fmt: skip
-    """One pair (j > i, rel = pj - pi): contact (spring, dashpot, shear) when they overlap, else
-    the magnets within the cutoff. j gets -f and |f| in its sum at once; returns what i gets
-    (f and its contact and attraction magnitudes). A free particle touching a member is marked
-    to join the robot."""
+    """One listed pair (j > i, rel = pj - pi) within the cutoff: j gets -f and |f| in its sum
+    at once; returns what i gets (f and its contact and attraction magnitudes)."""
     c = ri + body[B_R, j]
     reach = c + prm[P_CUTOFF]
     if d2 >= reach * reach or d2 == 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    d = math.sqrt(d2)
-    nx = dx / d
-    ny = dy / d
-    contact = 0.0
-    attract = 0.0
-    if d < c:
-        px, py = _contact(
-            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
-        )
-        contact = math.sqrt(px * px + py * py)
-        body[B_FR, j] += contact
-        touching = True
-    else:
-        strength = magi * body[B_MAG, j]
-        px = 0.0
-        py = 0.0
-        if strength > 0.0:
-            attract = _magnet(d - c, strength, prm)
-            px = attract * nx
-            py = attract * ny
-            body[B_FA, j] += attract
-        touching = d - c < prm[P_TOUCH_GAP]
+    px, py, contact, attract, touching = _law(j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm)
+    body[B_FR, j] += contact
+    body[B_FA, j] += attract
     body[B_FX, j] -= px
     body[B_FY, j] -= py
     if touching and kind_i != flags[F_KIND, j]:
-        if kind_i == FREE and flags[F_KIND, j] == MEMBER:
-            flags[F_JOINED, i] = 1
-        elif kind_i == MEMBER and flags[F_KIND, j] == FREE:
-            flags[F_JOINED, j] = 1
+        _join(i, j, kind_i, flags)
     return px, py, contact, attract
 
 
@@ -510,6 +520,133 @@ def _objects_settle(
         )  # fmt: skip
         objects[m, O_VX] = vx
         objects[m, O_VY] = vy
+
+
+# ---- the published code's stale grid (NeighbourSearch.PUBLISHED_STALE_GRID) ---------------------
+
+STALE_GRID = 512
+"""The published grid: STALE_GRID x STALE_GRID cells (a power of two: cell indices wrap)."""
+STALE_REACH = 2
+"""A particle meets the particles listed in the cells up to this many cells away (5 x 5)."""
+
+
+@numba.njit(cache=True, inline="always")
+def _stale_cell(x: float, y: float, origin: float, cell: float) -> tuple[int, int]:
+    """Unwrapped grid column and row of a point (the published floor((p - origin) / cell))."""
+    return math.floor((x - origin) / cell), math.floor((y - origin) / cell)
+
+
+@numba.njit(cache=True, inline="always")
+def _stale_hash(cx: int, cy: int) -> int:
+    """Wrapped cell index of a column and row (negative ones wrap as two's complement does)."""
+    mask = STALE_GRID - 1
+    return (cy & mask) * STALE_GRID + (cx & mask)
+
+
+@numba.njit(cache=True)
+def stale_index(hashes: IntArray, members: IntArray, start: IntArray) -> None:
+    """The listing from each particle's listed cell: members holds the particles cell by cell
+    (index order within a cell, a stable sort as the published radix sort), cell h's run is
+    members[start[h]:start[h + 1]]."""
+    start[:] = 0
+    for i in range(hashes.shape[0]):
+        start[hashes[i] + 1] += 1
+    for h in range(start.shape[0] - 1):
+        start[h + 1] += start[h]
+    fill = start[:-1].copy()
+    for i in range(hashes.shape[0]):
+        members[fill[hashes[i]]] = i
+        fill[hashes[i]] += 1
+
+
+@numba.njit(cache=True)
+def stale_list(
+    pos: FloatArray, origin: float, cell: float, hashes: IntArray, members: IntArray,
+    start: IntArray,
+) -> None:  # fmt: skip
+    """Lists every particle in the cell it is in now (the published sort)."""
+    for i in range(pos.shape[1]):
+        cx, cy = _stale_cell(pos[0, i], pos[1, i], origin, cell)
+        hashes[i] = _stale_hash(cx, cy)
+    stale_index(hashes, members, start)
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _stale_pairs(
+    pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, members: IntArray,
+    start: IntArray, origin: float, cell: float, prm: FloatArray,
+) -> None:  # fmt: skip
+    """The pair pass as published: each particle i, in the cell it is in NOW, meets every
+    particle LISTED in the 5 x 5 cells around it (within the magnet cutoff) and takes only its
+    own side of each pair, so a pair whose partner was listed too far away acts on one of the
+    two or on neither."""
+    cutoff = prm[P_CUTOFF]
+    for i in range(pos.shape[1]):
+        xi = pos[0, i]
+        yi = pos[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
+        ri = body[B_R, i]
+        magi = body[B_MAG, i]
+        kind_i = flags[F_KIND, i]
+        fx = 0.0
+        fy = 0.0
+        f_contact = 0.0
+        f_attract = 0.0
+        cx, cy = _stale_cell(xi, yi, origin, cell)
+        for oy in range(-STALE_REACH, STALE_REACH + 1):
+            for ox in range(-STALE_REACH, STALE_REACH + 1):
+                h = _stale_hash(cx + ox, cy + oy)
+                for slot in range(start[h], start[h + 1]):
+                    j = members[slot]
+                    if j == i:
+                        continue
+                    dx = pos[0, j] - xi
+                    dy = pos[1, j] - yi
+                    d2 = dx * dx + dy * dy
+                    c = ri + body[B_R, j]
+                    reach = c + cutoff
+                    if d2 >= reach * reach or d2 == 0.0:
+                        continue
+                    px, py, contact, attract, touching = _law(
+                        j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm
+                    )
+                    fx += px
+                    fy += py
+                    f_contact += contact
+                    f_attract += attract
+                    if touching and kind_i != flags[F_KIND, j]:
+                        _join(i, j, kind_i, flags)
+        body[B_FX, i] += fx
+        body[B_FY, i] += fy
+        body[B_FR, i] += f_contact
+        body[B_FA, i] += f_attract
+
+
+@numba.njit(cache=True)
+def advance_stale(
+    steps: int, first: int, sort_steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
+    hashes: IntArray, members: IntArray, start: IntArray, origin: float, cell: float,
+    prm: FloatArray,
+) -> int:  # fmt: skip
+    """`advance` with the published code's search, serial (for small swarms): the particles are
+    re-listed after the position update of every step whose number (`first` + s) is a multiple
+    of sort_steps. Passive objects still meet every particle directly. Returns the listings."""
+    n = pos.shape[1]
+    listings = 0
+    for s in range(steps):
+        _kinematics(0, n, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm)
+        _objects_move(objects, prm)
+        if (first + s) % sort_steps == 0:
+            stale_list(pos, origin, cell, hashes, members, start)
+            listings += 1
+        _stale_pairs(pos, vel_old, body, flags, members, start, origin, cell, prm)
+        _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+        if objects.shape[0] > 0:
+            _objects_settle(objects, acc, rects, circles, prm)
+    return listings
 
 
 # ---- neighbour lists ---------------------------------------------------------------------------

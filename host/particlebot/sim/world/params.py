@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from enum import Enum
 
 # Units throughout the world: metres, seconds, and particle masses of 1 (a force is an
 # acceleration of a particle).
@@ -11,6 +12,21 @@ from dataclasses import dataclass, fields
 ATTRACTION_FITTED = 1.5884e-5
 """A of F = A / gap^2 (N m^2) as the published model fits it: 4.4 N at a 1.9 mm gap, close to the
 4.5 N peak adhesion of SI S7. The published main multiplies it by 3 for its studies."""
+
+
+class NeighbourSearch(Enum):
+    """How a particle finds the particles it interacts with."""
+
+    EXACT = "exact"
+    """Ours: every pair within reach, from neighbour lists kept up to date (the default)."""
+    PUBLISHED_STALE_GRID = "published-stale-grid"
+    """The published code's search, for measuring what it changes (slow, for small swarms): the
+    particles are listed in a 512 x 512 wrapping grid of 2 r_max cells (origin at -half_width)
+    every sort_interval; each step a particle meets every particle LISTED in the 5 x 5 cells
+    around its CURRENT cell, so a pair goes unseen from one side once the other has drifted two
+    cells from where it was listed, until the next sort. One-sided, as published: i can feel j
+    while j does not feel i. Serial; passive objects still meet every particle directly;
+    `World.rebuilds` counts the listings."""
 
 
 @dataclass(frozen=True)
@@ -74,10 +90,17 @@ class PhysicsParams:
     list is rebuilt when a body has moved skin / 2 since the last build. No effect on results
     beyond the order of floating-point sums."""
 
+    neighbour_search: NeighbourSearch = NeighbourSearch.EXACT
+    """EXACT (ours) or PUBLISHED_STALE_GRID (the published code's, to measure what it changes;
+    combine it with a magnet_cutoff of 1 m for the published reach: everything in the block)."""
+    sort_interval: float = 180.0
+    """PUBLISHED_STALE_GRID only: simulated seconds between re-listings of the grid (the
+    published 180 s; it lists at t = 0, 180, 360 ... after that step's position update)."""
+
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, bool):
+            if isinstance(value, bool | Enum):
                 continue
             if not (isinstance(value, float | int) and math.isfinite(value)):
                 raise ValueError(f"{f.name} must be a finite number, not {value!r}")
@@ -93,6 +116,11 @@ class PhysicsParams:
             raise ValueError("skin must be > 0")
         if self.half_width <= self.r_max:
             raise ValueError("half_width must exceed r_max")
+        if not isinstance(self.neighbour_search, NeighbourSearch):
+            choices = ", ".join(m.name for m in NeighbourSearch)
+            raise ValueError(f"neighbour_search must be one of {choices}")
+        if self.sort_interval < self.dt:
+            raise ValueError("sort_interval must be at least one step")
 
     @property
     def list_radius(self) -> float:

@@ -16,7 +16,7 @@ from particlebot.sim.world import kernels as k
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
 from particlebot.sim.world.light import Lamp, LightField, ShadowMode
-from particlebot.sim.world.params import PhysicsParams
+from particlebot.sim.world.params import NeighbourSearch, PhysicsParams
 
 Precision = Literal["float64", "float32"]
 Observer = Callable[["World"], None]
@@ -238,6 +238,12 @@ class World:
         self._observers: list[_Observation] = []
         self._view = _View(self)
         self.rebuilds = 0
+        # The published code's search (PUBLISHED_STALE_GRID): each particle's listed cell, and
+        # the listing cell by cell; listed at the first step (t = 0) and every sort_interval.
+        self._stale = p.neighbour_search == NeighbourSearch.PUBLISHED_STALE_GRID
+        self._stale_hashes = np.zeros(n if self._stale else 0, dtype=np.int64)
+        self._stale_members = np.arange(n if self._stale else 0, dtype=np.int64)
+        self._stale_start = np.zeros(k.STALE_GRID**2 + 1 if self._stale else 1, dtype=np.int64)
 
     # ---- what the world is now ---------------------------------------------------------------
 
@@ -335,11 +341,20 @@ class World:
             if not self._dead_done:
                 block = min(block, max(self._dead_step() - self._steps, 1))
             rows = self._command(block)
-            self._nbr, rebuilds = k.advance(
-                rows, self._targets, self._ext, self._pos, self._ref, self._vel, self._vel_old,
-                self._body, self._flags, self._nbr, self._ncount, self._rects, self._circles,
-                self._objects, self._acc, self._bounds, self._prm,
-            )  # fmt: skip
+            if self._stale:
+                rebuilds = k.advance_stale(
+                    rows, self._steps, max(1, round(self.params.sort_interval / self.params.dt)),
+                    self._targets, self._ext, self._pos, self._ref, self._vel, self._vel_old,
+                    self._body, self._flags, self._rects, self._circles, self._objects,
+                    self._acc, self._stale_hashes, self._stale_members, self._stale_start,
+                    -self.params.half_width, 2 * self.params.r_max, self._prm,
+                )  # fmt: skip
+            else:
+                self._nbr, rebuilds = k.advance(
+                    rows, self._targets, self._ext, self._pos, self._ref, self._vel,
+                    self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._rects,
+                    self._circles, self._objects, self._acc, self._bounds, self._prm,
+                )  # fmt: skip
             self.rebuilds += rebuilds
             self._steps += rows
             self._view.invalidate()
@@ -355,6 +370,37 @@ class World:
             self.controller.command(self._view, self._targets[0])
             done = 1
         return min(done, rows)
+
+    def place(self, index: int, x: float, y: float) -> None:
+        """Puts particle `index` at (x, y) at rest, as a hand puts it down (calibration moves
+        simulated particles this way). ValueError, and nothing moved, for a place outside the
+        walls or inside an obstacle; overlapping other particles is the caller's business (the
+        contact forces push them apart on the next step)."""
+        if not 0 <= index < self.count:
+            raise ValueError(f"no particle {index} (0..{self.count - 1})")
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError("a particle's place must be finite")
+        slot = int(self._internal_slots(np.array([index]))[0])
+        radius = float(self._body[k.B_R, slot])
+        limit = self.params.half_width - radius
+        if abs(x) > limit or abs(y) > limit:
+            raise ValueError(f"particles must lie inside the walls at +-{self.params.half_width} m")
+        if self.arena.overlapping(np.array([x]), np.array([y]), np.array([radius]))[0]:
+            raise ValueError(f"({x:.3f}, {y:.3f}) cuts into an obstacle")
+        self._pos[:, slot] = (x, y)
+        self._vel[:, slot] = 0.0
+        self._vel_old[:, slot] = 0.0
+        self._nbr = k.build_lists(
+            self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
+            self._nbr, self._ncount, self._bounds, self._prm, True,
+        )  # fmt: skip
+        if self._stale:
+            # The rebuild re-ordered the particles the listing refers to: list them again.
+            k.stale_list(
+                self._pos, -self.params.half_width, 2 * self.params.r_max, self._stale_hashes,
+                self._stale_members, self._stale_start,
+            )  # fmt: skip
+        self._view.invalidate()
 
     def _dead_step(self) -> int:
         return math.ceil(self.dead.at_s / self.params.dt - 1e-9)
@@ -430,6 +476,8 @@ class World:
             "ext": self._ext.copy(),
             "objects": self._objects.copy(),
         }
+        if self._stale:
+            arrays["stale_hashes"] = self._stale_hashes.copy()
         return Snapshot(pickle.loads(pickle.dumps(setup)), arrays)
 
     @classmethod
@@ -466,6 +514,9 @@ class World:
             world._flags, world._ext, world._nbr, world._ncount, world._bounds, world._prm,
             False,
         )  # fmt: skip
+        if world._stale and "stale_hashes" in a:
+            world._stale_hashes = a["stale_hashes"].copy()
+            k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)
         return world
 
 

@@ -65,7 +65,6 @@ class GroupEstimator:
         self.params = params
         self._full = constants.adc_full_scale
         self._s_max = constants.s_n_max
-        self._group_cap = constants.group_count_max
         self._direct = self._direct_table()
         self._roots = self._root_table()
 
@@ -97,11 +96,13 @@ class GroupEstimator:
     def _saturate(self, zero_based: IntArray) -> IntArray:
         return np.minimum(zero_based + 1, self._s_max)
 
-    def _group_count(self, members: int) -> int:
-        """N_w: GROUPS, or one group per particle (the firmware's count + 1, capped)."""
+    def _group_count(self, v_max: int, v_min: int) -> int:
+        """N_w: GROUPS, or the rows the group spans toward the lamp (the firmware's method-A
+        S_n of its weakest reading less that of its strongest, plus one)."""
         if self.params.groups > 0:
             return self.params.groups
-        return min(members, self._group_cap)
+        direct = self._direct
+        return int(direct[min(v_min, self._full)] - direct[min(v_max, self._full)]) + 1
 
     def _direct_table(self) -> IntArray:
         """Method A depends on the own reading alone: its S_n for every reading 0..full scale."""
@@ -136,7 +137,7 @@ class GroupEstimator:
         v_max, v_min = int(own.max()), int(own.min())
         if v_max == v_min:
             return np.ones(own.shape, dtype=np.int64)
-        n_w = self._group_count(own.size)
+        n_w = self._group_count(v_max, v_min)
         index = np.minimum((v_max - own) * n_w // (v_max - v_min), n_w - 1)  # eqs. 17-18
         return self._saturate(index)
 
@@ -146,7 +147,7 @@ class GroupEstimator:
         if v_max == v_min:
             return np.ones(own.shape, dtype=np.int64)
         g = self._roots
-        n_w = self._group_count(own.size)
+        n_w = self._group_count(v_max, v_min)
         s_n = np.ones(own.shape, dtype=np.int64)  # the brightest keep 1
         below = usable < v_max
         v_n = usable[below]

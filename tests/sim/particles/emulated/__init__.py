@@ -1,0 +1,1 @@
+"""Tests of the real firmware image in simavr as particles of the world."""

@@ -1,0 +1,1 @@
+"""Tests of the native firmware logic (through the C API) as particles of the world."""

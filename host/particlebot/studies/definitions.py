@@ -488,7 +488,8 @@ def parse_overrides(text: str) -> tuple[tuple[str, float], ...]:
     sorted, each checked against the world's PhysicsParams and the published controller."""
     from particlebot.sim.world.params import PhysicsParams  # plain data, no numba
 
-    physics = {f.name: f.type for f in fields(PhysicsParams)}
+    # The numbers (a choice such as the neighbour search is not a number of the model).
+    physics = {f.name: f.type for f in fields(PhysicsParams) if f.type in ("float", "int", "bool")}
     pairs: dict[str, float] = {}
     for item in _items("--set", text):
         name, sep, value_text = (part.strip() for part in item.partition("="))

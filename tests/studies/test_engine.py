@@ -97,8 +97,10 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
         "import sys\n"
         "from particlebot.commands.study import main\n"
         "from particlebot.studies.standin import StandInRunner\n"
-        "sys.exit(main(sys.argv[1:], runner=StandInRunner(delay_s=0.5)))\n"
+        "sys.exit(main(sys.argv[1:], runner=StandInRunner(delay_s=1.5)))\n"
     )
+    # Runs of 1.5 s: after the third result, six seconds of runs remain for Ctrl-C to cut short
+    # even on a loaded machine (at 0.5 s a test process descheduled for 3 s saw the study finish).
     argv = [*QUICK_DEAD[:-1], "3", "--results", str(results), "--workers", "2"]
     # A session of its own, so that SIGINT goes to the whole group as a terminal's Ctrl-C does.
     study = subprocess.Popen(

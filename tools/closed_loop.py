@@ -194,7 +194,7 @@ def picture(results: list[PhototaxisResult], output: Path) -> None:
     tracks.set_ylabel("y (cm), toward the lamp")
     tracks.set_title("centroid every 30 s, every run (lamp on +y)")
     tracks.grid(True, alpha=0.3)
-    tracks.legend(fontsize=8, loc="upper left")  # the tracks rise from the origin: that corner is free
+    tracks.legend(fontsize=8, loc="upper left")  # the tracks rise from the origin: that is free
     for i, label in enumerate(labels):
         group = [r for r in results if r.trial.label == label]
         avg = [r.stats.average_pct for r in group]

@@ -187,14 +187,14 @@ def picture(results: list[PhototaxisResult], output: Path) -> None:
         tracks.plot(s.sample_x_cm, s.sample_y_cm, color=colours[r.trial.label], linewidth=1.2,
                     marker=".", markersize=3)  # fmt: skip
     for label in labels:
-        tracks.plot([], [], color=colours[label], label=label)
+        tracks.plot([], [], color=colours[label], label=label.replace(", ", ",\n"))
     tracks.plot([0], [0], "ks", markersize=5, label="start (origin)")
     tracks.set_aspect("equal", adjustable="datalim")
     tracks.set_xlabel("x (cm), the lamp's right")
     tracks.set_ylabel("y (cm), toward the lamp")
     tracks.set_title("centroid every 30 s, every run (lamp on +y)")
     tracks.grid(True, alpha=0.3)
-    tracks.legend(fontsize=8)
+    tracks.legend(fontsize=8, loc="upper left")  # the tracks rise from the origin: that is free
     for i, label in enumerate(labels):
         group = [r for r in results if r.trial.label == label]
         avg = [r.stats.average_pct for r in group]

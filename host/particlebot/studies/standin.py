@@ -26,7 +26,10 @@ class StandInRunner:
     attempt kills the worker process (os._exit) and leaves a marker in marker_dir, so the retry
     finds it and runs normally; raise_for names runs that raise every time; delay_s makes every
     run take that long; warm_dir receives one file per process that warmed up, and warm_up_fails
-    makes warming up raise (a worker without the simulator, say).
+    makes warming up raise (a worker without the simulator, say). hold_after N with ticket_dir
+    lets the first N runs (in the order they start, across processes) finish and holds every
+    later one until the file ticket_dir/"go" exists: a test can interrupt a study that cannot
+    have finished, however slow the machine.
     """
 
     crash_once: frozenset[str] = field(default_factory=frozenset)
@@ -35,6 +38,8 @@ class StandInRunner:
     delay_s: float = 0.0
     warm_dir: Path | None = None
     warm_up_fails: bool = False
+    hold_after: int | None = None
+    ticket_dir: Path | None = None
 
     @property
     def name(self) -> str:
@@ -56,7 +61,28 @@ class StandInRunner:
             raise RuntimeError(f"the stand-in fails {spec.run_id} on purpose")
         if self.delay_s > 0:
             time.sleep(self.delay_s)
+        if self.hold_after is not None and self.ticket_dir is not None:
+            _hold_beyond(self.hold_after, self.ticket_dir)
         return _pretend(spec)
+
+
+def _hold_beyond(allowed: int, folder: Path) -> None:
+    """Returns at once for the first `allowed` callers; later ones wait for folder/"go"."""
+    if _take_ticket(folder) >= allowed:
+        while not (folder / "go").exists():
+            time.sleep(0.05)  # held until the test lets go, or the worker is stopped
+
+
+def _take_ticket(folder: Path) -> int:
+    """The next number not yet taken in folder (atomic across processes: O_EXCL)."""
+    number = 0
+    while True:
+        try:
+            os.close(os.open(folder / f"ticket-{number}", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            number += 1
+        else:
+            return number
 
 
 def _pretend(spec: RunSpec) -> SimOutcome:

@@ -97,8 +97,11 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
     tickets.mkdir()
     # The first three runs finish; every later one is held, so the study cannot end before the
     # interrupt, however loaded the machine.
+    # The study takes Ctrl-C as a terminal's user would, even where pytest was started in the
+    # background of a non-interactive shell, which starts it (and so this child) ignoring SIGINT.
     code = (
-        "import sys\n"
+        "import signal, sys\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from pathlib import Path\n"
         "from particlebot.commands.study import main\n"
         "from particlebot.studies.standin import StandInRunner\n"

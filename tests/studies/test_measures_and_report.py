@@ -74,7 +74,8 @@ def test_carrying_measures_the_object_and_whether_the_swarm_still_touches_it() -
     setup = WorldSetup(particles=2, seed=1, duration_s=60, lamp_x=10.0, passive_object=obj)
     radius = 4.0 * R_MIN_M
     t = np.array([0.0, 60.0])
-    touching = np.array([[3.0 - radius - 0.1, 0.0], [0.0, 5.0]])
+    # One particle touches the object at (3, 0); the swarm's centre is 0.5 m from where it began.
+    touching = np.array([[3.0 - radius - 0.1, 0.0], [-2.0 + radius + 0.1, 0.0]])
     result = ObjectCarry().evaluate(
         setup,
         outcome(t, np.array([9.0, 8.5]), touching, object_start=(2.0, 0.0), object_end=(3.0, 0.0)),
@@ -96,12 +97,15 @@ def test_the_robot_is_the_largest_joined_group_and_loners_are_not_part_of_it() -
     chain = [[1.0 + 0.2 * i, 0.0] for i in range(5)]  # five touching particles around x = 1.4
     loners = [[-3.0, 0.0], [5.0, 5.0]]
     t = np.array([0.0, 1000.0])
-    result = RobotAdvance().evaluate(
-        setup, outcome(t, np.array([10.0, 8.6]), np.array(chain + loners))
-    )
+    ended = outcome(t, np.array([10.0, 8.6]), np.array(chain + loners))
+    result = RobotAdvance().evaluate(setup, ended)
     assert result["robot_size_ratio"] == pytest.approx(5 / 4)
-    assert result["robot_speed_mm_s"] == pytest.approx(1.4)
+    # The four it began with, x = 1.0 ... 1.6, not the annexed fifth one ahead of them.
+    assert result["robot_speed_mm_s"] == pytest.approx(1.3)
     assert result["heading_error_deg"] == pytest.approx(0.0, abs=1e-9)
+    assert RobotAdvance(centre="all").evaluate(setup, ended)["robot_speed_mm_s"] == pytest.approx(
+        1.4
+    )
 
 
 def records_for(

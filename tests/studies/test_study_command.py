@@ -34,6 +34,14 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
         (["dead", "--workers", "0"], "--workers: 0 is below 1"),
         (["dead", "--workers", "2", "--scheduler", "tcp://h:8786"], "--workers sizes the local"),
         (["noise", "--noise", "nan"], "--noise: nan is not a standard deviation"),
+        (["dead", "--set", "bogus=1"], "--set: 'bogus' is not a number of the model (attraction"),
+        (["dead", "--set", "shear"], "--set: expected NAME=VALUE, got 'shear'"),
+        (["dead", "--set", "neighbour_search=1"], "'neighbour_search' is not a number of the"),
+        (["dead", "--set", "shear=-1"], "--set: shear must be >= 0, not -1.0"),
+        (["dead", "--set", "shear=nan"], "--set: shear must be a finite number, not nan"),
+        (["dead", "--set", "r_min=0.1"], "--set: r_min is fixed in the studies"),
+        (["dead", "--set", "update_cycles=1.5"], "update_cycles must be a whole number >= 1"),
+        (["dead", "--set", "shear=20,shear=30"], "--set: shear given twice"),
     ],
 )
 def test_bad_options_get_one_line_and_status_2(
@@ -43,16 +51,6 @@ def test_bad_options_get_one_line_and_status_2(
     assert code == 2
     assert message in err
     assert err.count("\n") == 1 and err.startswith("particlebot: ")
-    assert not (tmp_path / "r").exists()
-
-
-def test_without_the_simulator_a_study_says_so_and_writes_nothing(
-    capsys: pytest.CaptureFixture[str], tmp_path: Path
-) -> None:
-    code, _, err = run(["dead", "--quick", "--results", str(tmp_path / "r")], capsys)
-    assert code == 2
-    assert "simulator" in err and "nothing was run" in err
-    assert err.count("\n") == 1
     assert not (tmp_path / "r").exists()
 
 

@@ -73,6 +73,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     what.add_argument(
         "--placement", metavar="NAME", help=f"initial placement: {', '.join(PLACEMENTS)}"
     )
+    what.add_argument(
+        "--set",
+        metavar="NAME=VALUE,...",
+        dest="overrides",
+        help="change published numbers: the world's (static_factor=1, shear=20, magnet_cutoff=0.6, "
+        "...) or the controller's phase_noise, update_cycles",
+    )
     where = parser.add_argument_group("where")
     where.add_argument(
         "--results", metavar="DIR", help="results folder (default results/NAME[-quick])"
@@ -119,6 +126,7 @@ def options_from(study: Study, args: argparse.Namespace) -> StudyOptions:
             skip=args.skip,
             placement=args.placement,
             quick=args.quick,
+            overrides=args.overrides,
         ),
     )
 
@@ -160,12 +168,7 @@ def _study(
         failed = {k: v for k, v in store.load_failures().items() if k in planned}
         return _report(study, options, specs, store, runner.name, failed)
     from particlebot.studies.engine import ClusterError, run_study
-    from particlebot.studies.seam import SimulatorUnavailableError
 
-    try:
-        runner.check()
-    except SimulatorUnavailableError as exc:
-        return fail(f"study {study.name}: {exc}")
     try:
         store.prepare()
         store.write_document(
@@ -257,7 +260,10 @@ def _report(
         write_text_atomically(
             store.root / "report.md", markdown(study, options, stats, failed, runner)
         )
-        note = "" if runner == "simulator" else f"made by the {runner}, not the simulator"
+        notes = [] if runner == "simulator" else [f"made by the {runner}, not the simulator"]
+        if options.overrides:
+            notes.append("changed: " + ", ".join(f"{k} = {v:g}" for k, v in options.overrides))
+        note = "; ".join(notes)
         plot_study(study, stats, store.root / "plot.png", note)
     except OSError as exc:
         return fail(f"cannot write the report to {store.root}: {exc.strerror or exc}")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 from particlebot.studies import published as paper
 from particlebot.studies.measures import (
@@ -26,6 +26,11 @@ no swarm reaches it within 2 h (10 particles cover about 9 m) and its wavefront 
 WALL_HALF_SPAN_DPD = 3.0
 """The gap study's wall reaches this far either side of the swarm's path: beyond anything the
 swarm can reach by going round, so the gap is the only way through."""
+
+
+GAP_SHADOW = "last"
+"""SI S9: particles the obstacle hides from the light "oscillate at the end of the cycle, as if
+defining the lowest end of the signal gradient": the simulator's shadow mode LAST."""
 
 
 class StudyOptionError(ValueError):
@@ -83,6 +88,8 @@ class StudyOptions:
     skip_s: float
     placement: str
     quick: bool
+    overrides: tuple[tuple[str, float], ...] = ()
+    """Published numbers changed in every run (`--set`)."""
 
 
 @dataclass(frozen=True)
@@ -141,6 +148,8 @@ class Study:
                     cell += ((self.sweep.key, value),)
                 for seed in range(options.first_seed, options.first_seed + options.seeds):
                     setup, measure = self.world(self, n, value, seed, options)
+                    if options.overrides:
+                        setup = replace(setup, overrides=options.overrides)
                     runs.append(RunSpec(self.name, cell, seed, setup, measure))
         return runs
 
@@ -207,6 +216,7 @@ def _gap_world(
         lamp_x=lamp_x,
         placement=options.placement,
         rects=wall,
+        shadow=GAP_SHADOW,
     )
     return setup, GapPassage(wall_far_x=far)
 
@@ -214,12 +224,17 @@ def _gap_world(
 def carry_geometry(n: int, radius_fraction: float) -> tuple[float, PassiveObject]:
     """The carry study's world: the object (radius radius_fraction x DPD, the mass and friction of
     one particle, no attraction: Fig. S19's caption) with its near edge 0.75 DPD ahead of the
-    initial centroid, as the gap study's obstacle; the lamp one DPD beyond its far edge."""
+    initial centroid, as the gap study's obstacle; the lamp FAR_LAMP_M beyond its far edge, so
+    that no swarm reaches it in the 3,000 cycles (10 h at 0.5 mm/s is 18 m). With the lamp
+    nearer, a swarm that reaches it closes round the object from all sides, and the published
+    model's explicit dashpot, 50 x dt per contact on a body of one particle's mass, is unstable
+    with that many contacts: measured, the object flew off at 500 m/s and scattered the swarm to
+    the walls (100 particles, 40 % DPD, the lamp one DPD beyond the object, after 3 h)."""
     dpd = densest_packing_diameter_m(n)
     radius = radius_fraction * dpd
     near = paper.GAP_OBSTACLE_DPD * dpd
     obj = PassiveObject(x=near + radius, y=0.0, radius_factor=radius / R_MIN_M)
-    return near + 2 * radius + dpd, obj
+    return near + 2 * radius + FAR_LAMP_M, obj
 
 
 def _carry_world(
@@ -428,6 +443,7 @@ class RawOptions:
     skip: str | None = None
     placement: str | None = None
     quick: bool = False
+    overrides: str | None = None
 
 
 def resolve(study: Study, raw: RawOptions) -> StudyOptions:
@@ -454,7 +470,59 @@ def resolve(study: Study, raw: RawOptions) -> StudyOptions:
     placement = raw.placement or "blob"
     if placement not in PLACEMENTS:
         raise StudyOptionError(f"--placement: {placement!r} is not one of {', '.join(PLACEMENTS)}")
-    return StudyOptions(sizes, values, seeds, first_seed, duration, skip, placement, raw.quick)
+    overrides = () if raw.overrides is None else parse_overrides(raw.overrides)
+    return StudyOptions(
+        sizes, values, seeds, first_seed, duration, skip, placement, raw.quick, overrides
+    )
+
+
+CONTROLLER_OVERRIDES = ("phase_noise", "update_cycles")
+"""The published controller's numbers `--set` may change (the others shape the 12 s cycle the
+studies' durations and Table S4 are counted in)."""
+FIXED_PHYSICS = ("dt", "r_min", "r_max")
+"""Numbers the studies' geometry and costs are defined in (DPD, gap sizes, particle-steps)."""
+
+
+def parse_overrides(text: str) -> tuple[tuple[str, float], ...]:
+    """'static_factor=1,phase_noise=0' -> (("phase_noise", 0.0), ("static_factor", 1.0)),
+    sorted, each checked against the world's PhysicsParams and the published controller."""
+    from particlebot.sim.world.params import PhysicsParams  # plain data, no numba
+
+    # The numbers (a choice such as the neighbour search is not a number of the model).
+    physics = {f.name: f.type for f in fields(PhysicsParams) if f.type in ("float", "int", "bool")}
+    pairs: dict[str, float] = {}
+    for item in _items("--set", text):
+        name, sep, value_text = (part.strip() for part in item.partition("="))
+        if not sep or not name or not value_text:
+            raise StudyOptionError(f"--set: expected NAME=VALUE, got {item!r}")
+        if name in FIXED_PHYSICS:
+            raise StudyOptionError(f"--set: {name} is fixed in the studies (geometry uses it)")
+        if name not in physics and name not in CONTROLLER_OVERRIDES:
+            known = ", ".join(sorted(n for n in physics if n not in FIXED_PHYSICS))
+            raise StudyOptionError(
+                f"--set: {name!r} is not a number of the model ({known}; "
+                f"{', '.join(CONTROLLER_OVERRIDES)})"
+            )
+        if name in pairs:
+            raise StudyOptionError(f"--set: {name} given twice")
+        try:
+            value = float(value_text)
+        except ValueError:
+            raise StudyOptionError(f"--set: {name}={value_text!r} is not a number") from None
+        pairs[name] = value
+    try:
+        PhysicsParams(**{k: v for k, v in pairs.items() if k in physics})  # type: ignore[arg-type]
+    except ValueError as exc:
+        raise StudyOptionError(f"--set: {exc}") from None
+    for name in CONTROLLER_OVERRIDES:
+        if name not in pairs:
+            continue
+        value = pairs[name]
+        whole = name == "update_cycles"
+        if not math.isfinite(value) or value < 0 or (whole and (value < 1 or value % 1)):
+            what = "a whole number >= 1" if whole else "a number >= 0"
+            raise StudyOptionError(f"--set: {name} must be {what}, not {value:g}")
+    return tuple(sorted(pairs.items()))
 
 
 def _items(flag: str, text: str) -> list[str]:

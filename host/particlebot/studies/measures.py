@@ -59,8 +59,9 @@ class GapPassage:
 @dataclass(frozen=True)
 class ObjectCarry:
     """Fig. S19: how far the passive object moved toward the lamp (m), how far the swarm's
-    centroid did, and whether the object is still touching the swarm at the end (1) or was left
-    behind or pushed off (0)."""
+    centroid did (from the initial centroid, the study frame's origin, to the particles' mean at
+    the end: the published CSV's centroid counts the object as a body too), and whether the
+    object is still touching the swarm at the end (1) or was left behind or pushed off (0)."""
 
     def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
         if (
@@ -73,11 +74,12 @@ class ObjectCarry:
         before = math.dist(outcome.object_start, lamp)
         after = math.dist(outcome.object_end, lamp)
         reach = setup.passive_object.radius_factor * R_MIN_M + R_MAX_M + 0.005
-        gaps = np.hypot(*(outcome.final_xy[: setup.particles] - np.asarray(outcome.object_end)).T)
-        distance = outcome.track.distance_m
+        swarm = outcome.final_xy[: setup.particles]
+        gaps = np.hypot(*(swarm - np.asarray(outcome.object_end)).T)
+        centre = swarm.mean(axis=0)
         return {
             "object_advance_m": before - after,
-            "swarm_advance_m": float(distance[0] - distance[-1]),
+            "swarm_advance_m": math.hypot(*lamp) - math.dist((centre[0], centre[1]), lamp),
             "object_carried": float(gaps.min() <= reach),
         }
 
@@ -89,13 +91,21 @@ class RobotAdvance:
     the lamp from the initial centroid (the study frame's origin), the angle between its
     displacement and the lamp's bearing, and its size relative to the particles it began with."""
 
+    centre: str = "founders"
+    """Whose centroid moves: 'founders', the robot's particles at the end that it began with
+    (free particles lie ahead of it, so annexing them would move an all-particle centroid
+    forward by where they lay, not by how the robot moved), or 'all' of the robot's particles."""
+
     def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
         xy = outcome.final_xy
         pairs = cKDTree(xy).query_pairs(CONTACT_M, output_type="ndarray")
         graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy),) * 2)
         _, labels = connected_components(graph, directed=False)
         robot = labels == np.bincount(labels).argmax()
-        centre = xy[robot].mean(axis=0)
+        moving = robot.copy()
+        if self.centre == "founders" and robot[: setup.particles].any():
+            moving[setup.particles :] = False
+        centre = xy[moving].mean(axis=0)
         lamp = np.array([setup.lamp_x, setup.lamp_y])
         advance = float(np.hypot(*lamp) - np.hypot(*(lamp - centre)))
         heading = math.degrees(math.atan2(centre[1], centre[0]) - math.atan2(lamp[1], lamp[0]))

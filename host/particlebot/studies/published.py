@@ -5,8 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 # ---- the published model's numbers the studies are defined in ---------------------------------
-# From the published simulator's defaults (shared notes, simulation parameters). The world of the
-# simulator will own these once it lands; the seam checks that they agree with its defaults.
+# From the published simulator's defaults (shared notes, simulation parameters). Kept here, not
+# imported from the world, so that defining and listing studies needs no numba; a test holds them
+# to the world's PhysicsParams and the published controller's settings.
 
 R_MIN_M = 0.0775
 """Contracted particle radius (m)."""

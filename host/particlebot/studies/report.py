@@ -141,6 +141,12 @@ def markdown(
         + (f", the first {options.skip_s:g} s left out" if study.uses_skip else "")
         + f", placement {options.placement}"
         + (" (quick preset)" if options.quick else "")
+        + (
+            "; published numbers changed: "
+            + ", ".join(f"{name} = {value:g}" for name, value in options.overrides)
+            if options.overrides
+            else ""
+        )
         + ".",
         "",
     ]

@@ -8,7 +8,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Protocol
 
-from particlebot.studies import seam
 from particlebot.studies.spec import RunRecord, RunSpec, SimOutcome, describe
 
 
@@ -18,10 +17,6 @@ class Runner(Protocol):
     @property
     def name(self) -> str:
         """Recorded in each result: a resumed study only counts results its own runner made."""
-
-    def check(self) -> None:
-        """Raises (with a one-line reason) if this runner cannot work here; called before a
-        study starts, so that nothing is submitted in vain."""
 
     def warm_up(self) -> None:
         """Called once in every worker process before its first run (and the client's, for a
@@ -41,13 +36,14 @@ class SimulatorRunner:
     def name(self) -> str:
         return "simulator"
 
-    def check(self) -> None:
-        seam.check_simulator()
-
     def warm_up(self) -> None:
+        from particlebot.studies import seam  # numba and the world: only where runs happen
+
         seam.warm_up()
 
     def __call__(self, spec: RunSpec) -> SimOutcome:
+        from particlebot.studies import seam
+
         folder = None if self.run_folders is None else self.run_folders / spec.run_id
         return seam.run_one(spec, folder)
 

@@ -80,11 +80,18 @@ class WorldSetup:
     free_particles: int = 0
     """Loose particles scattered in free_region, which the robot may annex (Fig. S21)."""
     free_region: Rect | None = None
+    shadow: str = "ignore"
+    """What an obstacle between a particle and the lamp does: 'ignore', 'last' (the particle
+    reads no light and goes last in the wave: the gap study, SI S9) or 'still'."""
     controller: str = "published"
     noise_diameters: float = 0.0
     """The controller's distance-estimation error, sd in minimum particle diameters (Fig. S20)."""
     dump_interval_s: float = 60.0
     """Rows of the centroid track (the published CSV's interval)."""
+    overrides: tuple[tuple[str, float], ...] = ()
+    """Published numbers changed for this run, (name, value) pairs: fields of the world's
+    PhysicsParams (static_factor, shear, magnet_cutoff, ...) and the published controller's
+    phase_noise and update_cycles (`particlebot study --set`)."""
 
 
 @dataclass(frozen=True)

@@ -45,9 +45,6 @@ class StandInRunner:
     def name(self) -> str:
         return "stand-in"
 
-    def check(self) -> None:
-        return None
-
     def warm_up(self) -> None:
         if self.warm_up_fails:
             raise ImportError("no simulator here (the stand-in pretends)")

@@ -134,6 +134,9 @@ class Run:
         self.total_steps = scenario.steps
         self._frame_every = frame_every
         self._snapshot_step = -1
+        self.pictures = True
+        """Draw swarm-start.png, swarm.png and track.png (a study's throwaway runs do not: the
+        three pictures cost four times a 10-particle half-hour's simulation)."""
         world.add_observer(self._dump, scenario.dump_every)
         world.add_observer(self._periodic_snapshot, scenario.snapshot_every)
         if record_video:
@@ -142,7 +145,9 @@ class Run:
     # ---- starting and resuming -------------------------------------------------------------
 
     @classmethod
-    def start(cls, built: Built, folder: Path, record_video: bool = False) -> Run:
+    def start(
+        cls, built: Built, folder: Path, record_video: bool = False, pictures: bool = True
+    ) -> Run:
         """Creates the run folder (which must not exist, or be empty) and writes the start:
         scenario files, the CSV's header and first row, a snapshot, the first picture."""
         if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
@@ -175,16 +180,22 @@ class Run:
             folder / scenario.output.csv_name, scenario.seed, bodies, scenario.output.per_particle
         )
         run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
+        run.pictures = pictures
         run._dump(world)
         run._snapshot()
-        save_swarm_picture(folder / START_PICTURE, frame, view)
+        if pictures:
+            save_swarm_picture(folder / START_PICTURE, frame, view)
         if record_video:
             run._film(world)
         return run
 
     @classmethod
     def resume(
-        cls, folder: Path, record_video: bool = False, duration_s: float | None = None
+        cls,
+        folder: Path,
+        record_video: bool = False,
+        duration_s: float | None = None,
+        pictures: bool = True,
     ) -> Run:
         """Continues a run from its latest snapshot; the CSV loses the rows written after it
         (the resumed run writes them again, the same). duration_s moves the run's end (later
@@ -221,6 +232,7 @@ class Run:
         csv = CsvLog.resume(csv_path, world.t, scenario.output.per_particle)
         record_video = record_video or bool(state.get("video"))
         run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
+        run.pictures = pictures
         run._snapshot_step = world.steps
         if record_video and not state.get("video"):
             _write_state(folder, {**state, "video": True})
@@ -306,18 +318,19 @@ class Run:
 
     def _finish(self, wall_s: float, steps_now: int, snapshot: Path) -> Summary:
         world, folder = self.world, self.folder
-        frame = Frame.of(world)
-        save_swarm_picture(
-            folder / END_PICTURE,
-            frame,
-            View.around(frame, self.view.lamp, self.view.arena, self.view.title),
-        )
         csv_path = folder / self.scenario.output.csv_name
-        try:
-            track = read_published_csv(csv_path)
-            save_track_plot(folder / TRACK_PICTURE, track, self.view)
-        except SimFormatError:
-            pass  # no rows yet beyond the header: nothing to plot
+        if self.pictures:
+            frame = Frame.of(world)
+            save_swarm_picture(
+                folder / END_PICTURE,
+                frame,
+                View.around(frame, self.view.lamp, self.view.arena, self.view.title),
+            )
+            try:
+                track = read_published_csv(csv_path)
+                save_track_plot(folder / TRACK_PICTURE, track, self.view)
+            except SimFormatError:
+                pass  # no rows yet beyond the header: nothing to plot
         if self.record_video and self.finished:
             video.encode(folder / FRAMES, folder / self.scenario.output.video_name)
         end = world.centroid()

@@ -1,0 +1,299 @@
+#!/usr/bin/env python3
+"""Draws docs/studies' comparison figures from the summary.csv files of finished study folders:
+dead-particle speeds relative to each size's 0 % cell and with one published number changed,
+Fig. S18 (gap success against gap size, all sizes on one plot) and Fig. S20 relative to the
+noise-free speed. Folders that are missing are left out of the figures."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+from collections import defaultdict
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+
+from particlebot.studies import published as paper
+
+Cells = dict[int, list[tuple[float, float, float, int]]]
+"""particles -> [(sweep value, mean, sd, runs)] of one metric, sorted by the sweep value."""
+
+
+def read(folder: Path, metric: str) -> Cells:
+    """One metric of a study folder's summary.csv; empty when the folder has none."""
+    path = folder / "summary.csv"
+    cells: Cells = defaultdict(list)
+    if not path.is_file():
+        return cells
+    with path.open(newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    if not rows:
+        return cells
+    sweep = list(rows[0])[1]  # the sweep's column, or "metric" for a study without one
+    for row in rows:
+        if row["metric"] != metric or not row["mean"]:
+            continue
+        sd = float(row["sd"]) if row["sd"] else math.nan
+        cells[int(row["particles"])].append(
+            (
+                0.0 if sweep == "metric" else float(row[sweep]),
+                float(row["mean"]),
+                sd,
+                int(row["runs"]),
+            )
+        )
+    for row_cells in cells.values():
+        row_cells.sort()
+    return cells
+
+
+COLOURS = {10: "tab:blue", 30: "tab:purple", 100: "tab:orange", 1000: "tab:green"}
+
+
+def dead_figures(results: Path, out: Path) -> list[Path]:
+    ours: Cells = defaultdict(list)
+    for name in ("dead-small", "dead-1000"):
+        for n, cells in read(results / name, "speed_mm_s").items():
+            ours[n] = cells
+    if not ours:
+        return []
+    fig, (absolute, relative) = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120)
+    for n, cells in sorted(ours.items()):
+        colour = COLOURS.get(n, "tab:gray")
+        x = [100 * f for f, *_ in cells]
+        base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
+        means = [m for _, m, _, _ in cells]
+        sds = [0.0 if math.isnan(s) else s for _, _, s, _ in cells]
+        runs = min(r for *_, r in cells)
+        absolute.plot(x, means, "o-", color=colour, ms=3.5, label=f"{n:,} ours ({runs} seeds)")
+        absolute.fill_between(
+            x,
+            [m - s for m, s in zip(means, sds, strict=True)],
+            [m + s for m, s in zip(means, sds, strict=True)],
+            color=colour,
+            alpha=0.18,
+            lw=0,
+        )
+        relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")
+        published = paper.TABLE_S3_MM_S[n]
+        px = [100 * f for f in published if f <= max(f for f, *_ in cells) + 1e-9]
+        pm = [published[f / 100].mean for f in px]
+        ps = [published[f / 100].sd for f in px]
+        absolute.errorbar(
+            [v + 0.6 for v in px], pm, yerr=ps, fmt="s", mfc="white", color=colour, ms=4,
+            capsize=3, lw=1, label=f"{n:,} paper",
+        )  # fmt: skip
+        relative.plot(
+            px, [m / published[0.0].mean for m in pm], "s--", mfc="white", color=colour, ms=4,
+            lw=1, label=f"{n:,} paper",
+        )  # fmt: skip
+    absolute.set_ylabel("speed toward the light (mm/s)")
+    absolute.set_title("Table S3: speed, mean ± 1 sd (ours: band; paper: bars)", fontsize=10)
+    relative.set_ylabel("speed / speed with no dead particles")
+    relative.set_title("The same, relative to each size's 0 % cell", fontsize=10)
+    for ax in (absolute, relative):
+        ax.set_xlabel("dead particles (%)")
+        ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7.5, ncol=2)
+    fig.tight_layout()
+    paths = [out / "dead.png"]
+    fig.savefig(paths[0])
+    plt.close(fig)
+
+    variants = {
+        "published defaults": "dead-small",
+        "static friction 1 x μ g (not 2)": "dead-static1",
+        "no phase noise": "dead-nophasenoise",
+    }
+    found = {label: read(results / name, "speed_mm_s") for label, name in variants.items()}
+    found = {label: cells for label, cells in found.items() if cells}
+    if len(found) > 1:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120, sharey=False)
+        for ax, n in zip(axes, (10, 100), strict=True):
+            published = paper.TABLE_S3_MM_S[n]
+            top = max(f for variant in found.values() for f, *_ in variant.get(n, []))
+            px = [f for f in published if f <= top + 1e-9]
+            ax.errorbar(
+                [100 * f for f in px], [published[f].mean for f in px],
+                yerr=[published[f].sd for f in px], fmt="s", mfc="white", color="k", ms=4,
+                capsize=3, lw=1, label="paper (Table S3)",
+            )  # fmt: skip
+            for label, variant in found.items():
+                row = variant.get(n, [])
+                if not row:
+                    continue
+                runs = min(r for *_, r in row)
+                ax.errorbar(
+                    [100 * f + 0.5 * len(ax.lines) for f, *_ in row], [m for _, m, _, _ in row],
+                    yerr=[0.0 if math.isnan(s) else s for _, _, s, _ in row], fmt="o-", ms=3.5,
+                    capsize=2, lw=1, label=f"ours, {label} ({runs} seeds)",
+                )  # fmt: skip
+            ax.set_title(f"{n} particles", fontsize=10)
+            ax.set_xlabel("dead particles (%)")
+            ax.set_ylabel("speed toward the light (mm/s)")
+            ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7.5)
+        fig.suptitle("Table S3 with one published number changed (2 h, first 30 min left out)")
+        fig.tight_layout()
+        paths.append(out / "dead-variants.png")
+        fig.savefig(paths[-1])
+        plt.close(fig)
+    return paths
+
+
+def speed_figure(results: Path, out: Path) -> list[Path]:
+    """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
+    sizes it did not run, beside Table S3's 0 % column."""
+    points: dict[int, tuple[float, float, int]] = {}
+    for name in ("dead-1000", "speed-small"):
+        for n, cells in read(results / name, "speed_mm_s").items():
+            for value, mean, sd, runs in cells:
+                if value == 0.0:
+                    points[n] = (mean, sd, runs)
+    if not points:
+        return []
+    sizes = sorted(points)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
+    means = [points[n][0] for n in sizes]
+    sds = [0.0 if math.isnan(points[n][1]) else points[n][1] for n in sizes]
+    ax.plot(sizes, means, "o-", color="tab:blue", ms=4, label="ours (mean ± 1 sd over seeds)")
+    ax.fill_between(
+        sizes,
+        [m - s for m, s in zip(means, sds, strict=True)],
+        [m + s for m, s in zip(means, sds, strict=True)],
+        color="tab:blue",
+        alpha=0.2,
+        lw=0,
+    )
+    for n in sizes:
+        ax.annotate(f"{points[n][2]}", (n, points[n][0]), textcoords="offset points", xytext=(4, 6),
+                    fontsize=7, color="tab:blue")  # fmt: skip
+    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
+    ax.errorbar(
+        list(published), [c.mean for c in published.values()],
+        yerr=[c.sd for c in published.values()], fmt="s", mfc="white", color="k", ms=4.5,
+        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
+    )  # fmt: skip
+    ax.set_xscale("log")
+    ax.set_xlabel("particles")
+    ax.set_ylabel("speed toward the light (mm/s)")
+    ax.set_title(
+        "Speed against swarm size, 0 % dead (2 h, first 30 min left out; ours: seeds marked)",
+        fontsize=10,
+    )
+    ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out / "speed.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return [path]
+
+
+def gap_figure(results: Path, out: Path) -> list[Path]:
+    ours: Cells = defaultdict(list)
+    for name in ("gap-10", "gap-100"):
+        for n, cells in read(results / name, "success").items():
+            ours[n] = cells
+    if not ours:
+        return []
+    fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
+    for n, cells in sorted(ours.items()):
+        colour = COLOURS.get(n, "tab:gray")
+        x = [100 * f for f, *_ in cells]
+        means = [m for _, m, _, _ in cells]
+        sds = [0.0 if math.isnan(s) else s for _, _, s, _ in cells]
+        runs = min(r for *_, r in cells)
+        ax.plot(x, means, "o-", color=colour, ms=3.5, label=f"{n:,} particles ({runs} runs)")
+        ax.fill_between(
+            x,
+            [max(0.0, m - s) for m, s in zip(means, sds, strict=True)],
+            [min(1.0, m + s) for m, s in zip(means, sds, strict=True)],
+            color=colour,
+            alpha=0.2,
+            lw=0,
+        )
+    ax.set_xlabel("gap (% of the densest packing diameter)")
+    ax.set_ylabel("fraction of the particles through the gap")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_title("Fig. S18: passing a narrow gap after 4,500 cycles (mean ± 1 sd)", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out / "gap.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return [path]
+
+
+def noise_figure(results: Path, out: Path) -> list[Path]:
+    ours: Cells = defaultdict(list)
+    for name in ("noise-100", "noise-1000"):
+        for n, cells in read(results / name, "speed_mm_s").items():
+            ours[n] = cells
+    if not ours:
+        return []
+    fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
+    for n, cells in sorted(ours.items()):
+        colour = COLOURS.get(n, "tab:gray")
+        base = next(m for f, m, _, _ in cells if f == 0.0)
+        x = [f for f, *_ in cells]
+        rel = [m / base for _, m, _, _ in cells]
+        band = [0.0 if math.isnan(s) else s / base for _, _, s, _ in cells]
+        runs = min(r for *_, r in cells)
+        ax.plot(x, rel, "o-", color=colour, ms=3.5, label=f"{n:,} particles, ours ({runs} seeds)")
+        ax.fill_between(
+            x,
+            [r - b for r, b in zip(rel, band, strict=True)],
+            [r + b for r, b in zip(rel, band, strict=True)],
+            color=colour,
+            alpha=0.2,
+            lw=0,
+        )
+    ax.plot(
+        [0.0, 1.0], [1.0, paper.FIG_S20_RELATIVE_SPEED_AT_ONE_DIAMETER], "kD", mfc="white",
+        label="paper, 10,000 particles: -33 % at 1 diameter",
+    )  # fmt: skip
+    right = max(f for cells in ours.values() for f, *_ in cells)
+    ax.plot(
+        [paper.FIG_S20_STANDSTILL_BEYOND_DIAMETERS, right], [0.0, 0.0], "k-", lw=3, alpha=0.4,
+        label="paper: standstill beyond 2 diameters",
+    )  # fmt: skip
+    ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
+    ax.set_xlabel("distance-estimation error (sd, minimum particle diameters)")
+    ax.set_ylabel("speed / noise-free speed")
+    ax.set_title("Fig. S20: speed against sensor noise (2 h, first 30 min left out)", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out / "noise.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return [path]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("results", type=Path, help="folder holding the study folders")
+    parser.add_argument("out", type=Path, help="where the PNGs go (docs/studies)")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    for path in (
+        dead_figures(args.results, args.out)
+        + speed_figure(args.results, args.out)
+        + gap_figure(args.results, args.out)
+        + noise_figure(args.results, args.out)
+    ):
+        print(path)
+
+
+if __name__ == "__main__":
+    main()

@@ -56,9 +56,13 @@ def console(pilot: Pilot[int]) -> ConsoleApp:
 
 
 async def refreshed(pilot: Pilot[int]) -> None:
-    """Draws what the model knows now, as the app's refresh timer would, and lets the screen
-    settle (waiting for the timer instead failed on a loaded machine: it may not have fired)."""
-    console(pilot).refresh_view()
+    """Does what the app's two timers do, once each: poll the swarm (frames heard, a STOP
+    confirmed, a quit that was waiting for it) and draw what the model knows; then lets the
+    screen settle. Waiting for the timers instead failed on a loaded machine: they may not have
+    fired yet."""
+    app = console(pilot)
+    app._tick()
+    app.refresh_view()
     await pilot.pause()
 
 

@@ -55,11 +55,44 @@ def read(folder: Path, metric: str) -> Cells:
 COLOURS = {10: "tab:blue", 30: "tab:purple", 100: "tab:orange", 1000: "tab:green"}
 
 
-def dead_figures(results: Path, out: Path) -> list[Path]:
+def gather(results: Path, names: tuple[str, ...], metric: str) -> Cells:
+    """One metric from several study folders (one per set of sizes), by size."""
     ours: Cells = defaultdict(list)
-    for name in ("dead-small", "dead-1000"):
-        for n, cells in read(results / name, "speed_mm_s").items():
-            ours[n] = cells
+    for name in names:
+        ours.update(read(results / name, metric))
+    return ours
+
+
+def sds_of(cells: list[tuple[float, float, float, int]], scale: float = 1.0) -> list[float]:
+    """Each cell's sd over scale; 0 where one run left no sd."""
+    return [0.0 if math.isnan(s) else s / scale for _, _, s, _ in cells]
+
+
+def band(
+    ax: plt.Axes, x: list[float], means: list[float], sds: list[float], colour: str, label: str,
+    *, alpha: float = 0.2, low: float = -math.inf, high: float = math.inf,
+) -> None:  # fmt: skip
+    """Our means as a line and mean +- sd as a shaded band (clipped to [low, high])."""
+    ax.plot(x, means, "o-", color=colour, ms=3.5, label=label)
+    ax.fill_between(
+        x,
+        [max(low, m - s) for m, s in zip(means, sds, strict=True)],
+        [min(high, m + s) for m, s in zip(means, sds, strict=True)],
+        color=colour,
+        alpha=alpha,
+        lw=0,
+    )
+
+
+def save(fig: plt.Figure, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def dead_figures(results: Path, out: Path) -> list[Path]:
+    ours = gather(results, ("dead-small", "dead-1000"), "speed_mm_s")
     if not ours:
         return []
     fig, (absolute, relative) = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120)
@@ -68,17 +101,8 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         x = [100 * f for f, *_ in cells]
         base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
         means = [m for _, m, _, _ in cells]
-        sds = [0.0 if math.isnan(s) else s for _, _, s, _ in cells]
         runs = min(r for *_, r in cells)
-        absolute.plot(x, means, "o-", color=colour, ms=3.5, label=f"{n:,} ours ({runs} seeds)")
-        absolute.fill_between(
-            x,
-            [m - s for m, s in zip(means, sds, strict=True)],
-            [m + s for m, s in zip(means, sds, strict=True)],
-            color=colour,
-            alpha=0.18,
-            lw=0,
-        )
+        band(absolute, x, means, sds_of(cells), colour, f"{n:,} ours ({runs} seeds)", alpha=0.18)
         relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")
         published = paper.TABLE_S3_MM_S[n]
         px = [100 * f for f in published if f <= max(f for f, *_ in cells) + 1e-9]
@@ -101,10 +125,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7.5, ncol=2)
-    fig.tight_layout()
-    paths = [out / "dead.png"]
-    fig.savefig(paths[0])
-    plt.close(fig)
+    paths = [save(fig, out / "dead.png")]
 
     variants = {
         "published defaults": "dead-small",
@@ -131,7 +152,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
                 runs = min(r for *_, r in row)
                 ax.errorbar(
                     [100 * f + 0.5 * len(ax.lines) for f, *_ in row], [m for _, m, _, _ in row],
-                    yerr=[0.0 if math.isnan(s) else s for _, _, s, _ in row], fmt="o-", ms=3.5,
+                    yerr=sds_of(row), fmt="o-", ms=3.5,
                     capsize=2, lw=1, label=f"ours, {label} ({runs} seeds)",
                 )  # fmt: skip
             ax.set_title(f"{n} particles", fontsize=10)
@@ -141,10 +162,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7.5)
         fig.suptitle("Table S3 with one published number changed (2 h, first 30 min left out)")
-        fig.tight_layout()
-        paths.append(out / "dead-variants.png")
-        fig.savefig(paths[-1])
-        plt.close(fig)
+        paths.append(save(fig, out / "dead-variants.png"))
     return paths
 
 
@@ -191,18 +209,11 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = out / "speed.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return [path]
+    return [save(fig, out / "speed.png")]
 
 
 def gap_figure(results: Path, out: Path) -> list[Path]:
-    ours: Cells = defaultdict(list)
-    for name in ("gap-10", "gap-100"):
-        for n, cells in read(results / name, "success").items():
-            ours[n] = cells
+    ours = gather(results, ("gap-10", "gap-100"), "success")
     if not ours:
         return []
     fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
@@ -210,35 +221,20 @@ def gap_figure(results: Path, out: Path) -> list[Path]:
         colour = COLOURS.get(n, "tab:gray")
         x = [100 * f for f, *_ in cells]
         means = [m for _, m, _, _ in cells]
-        sds = [0.0 if math.isnan(s) else s for _, _, s, _ in cells]
         runs = min(r for *_, r in cells)
-        ax.plot(x, means, "o-", color=colour, ms=3.5, label=f"{n:,} particles ({runs} runs)")
-        ax.fill_between(
-            x,
-            [max(0.0, m - s) for m, s in zip(means, sds, strict=True)],
-            [min(1.0, m + s) for m, s in zip(means, sds, strict=True)],
-            color=colour,
-            alpha=0.2,
-            lw=0,
-        )
+        label = f"{n:,} particles ({runs} runs)"
+        band(ax, x, means, sds_of(cells), colour, label, low=0.0, high=1.0)
     ax.set_xlabel("gap (% of the densest packing diameter)")
     ax.set_ylabel("fraction of the particles through the gap")
     ax.set_ylim(-0.03, 1.03)
     ax.set_title("Fig. S18: passing a narrow gap after 4,500 cycles (mean ± 1 sd)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = out / "gap.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return [path]
+    return [save(fig, out / "gap.png")]
 
 
 def noise_figure(results: Path, out: Path) -> list[Path]:
-    ours: Cells = defaultdict(list)
-    for name in ("noise-100", "noise-1000"):
-        for n, cells in read(results / name, "speed_mm_s").items():
-            ours[n] = cells
+    ours = gather(results, ("noise-100", "noise-1000"), "speed_mm_s")
     if not ours:
         return []
     fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
@@ -247,17 +243,9 @@ def noise_figure(results: Path, out: Path) -> list[Path]:
         base = next(m for f, m, _, _ in cells if f == 0.0)
         x = [f for f, *_ in cells]
         rel = [m / base for _, m, _, _ in cells]
-        band = [0.0 if math.isnan(s) else s / base for _, _, s, _ in cells]
         runs = min(r for *_, r in cells)
-        ax.plot(x, rel, "o-", color=colour, ms=3.5, label=f"{n:,} particles, ours ({runs} seeds)")
-        ax.fill_between(
-            x,
-            [r - b for r, b in zip(rel, band, strict=True)],
-            [r + b for r, b in zip(rel, band, strict=True)],
-            color=colour,
-            alpha=0.2,
-            lw=0,
-        )
+        label = f"{n:,} particles, ours ({runs} seeds)"
+        band(ax, x, rel, sds_of(cells, scale=base), colour, label)
     ax.plot(
         [0.0, 1.0], [1.0, paper.FIG_S20_RELATIVE_SPEED_AT_ONE_DIAMETER], "kD", mfc="white",
         label="paper, 10,000 particles: -33 % at 1 diameter",
@@ -273,11 +261,7 @@ def noise_figure(results: Path, out: Path) -> list[Path]:
     ax.set_title("Fig. S20: speed against sensor noise (2 h, first 30 min left out)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = out / "noise.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return [path]
+    return [save(fig, out / "noise.png")]
 
 
 def main() -> None:

@@ -6,9 +6,9 @@ import logging
 import threading
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
-from types import TracebackType
 from typing import Self
 
+from particlebot.closing import ClosedOnExit
 from particlebot.protocol import (
     BASE_STATION_ID,
     DropEvent,
@@ -84,7 +84,7 @@ class Listener:
         """The session ended; flush and close."""
 
 
-class Session:
+class Session(ClosedOnExit):
     """Owns a radio, its frame decoder and the thread that reads it."""
 
     def __init__(self, radio: Radio, listeners: Iterable[Listener] = ()) -> None:
@@ -125,15 +125,7 @@ class Session:
                 _log.exception("listener %r failed to stop", listener)
 
     def __enter__(self) -> Self:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
+        return self.start()  # a session starts receiving when its block begins
 
     @property
     def running(self) -> bool:

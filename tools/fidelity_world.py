@@ -85,6 +85,45 @@ VARIANTS = [
         for times in (2, 4, 6)
     ),
 ]
+SENSITIVITY = [
+    Variant("published defaults"),
+    *(Variant(f"torque limit {c:g} (0.5)", physics={"torque_limit": c}) for c in (0.4, 0.6, 0.8)),
+    *(Variant(f"servo max speed {v:g} (0.1)", physics={"max_speed": v}) for v in (0.05, 0.2)),
+    *(Variant(f"mu {m:g} (0.4)", physics={"mu": m}) for m in (0.3, 0.5)),
+    Variant("static friction 1.5 mu g (2)", physics={"static_factor": 1.5}),
+    Variant("static friction 1 mu g (2)", physics={"static_factor": 1.0}),
+    *(Variant(f"spring {k:g} (1000)", physics={"spring": k}) for k in (500.0, 2000.0)),
+    *(Variant(f"damping {d:g} (10)", physics={"damping": d}) for d in (5.0, 20.0)),
+    *(Variant(f"shear {s:g} (40)", physics={"shear": s}) for s in (20.0, 30.0, 50.0)),
+    *(
+        Variant(f"magnet clamp {f:g} N (2.5)", physics={"magnet_clamp_force": f})
+        for f in (2.0, 3.0)
+    ),
+    *(
+        Variant(f"attraction {times}x fitted (3x)", physics={"attraction": times * 1.5884e-5})
+        for times in (2, 4)
+    ),
+    Variant("dt 0.005 s (0.01)", physics={"dt": 0.005}),
+    *(Variant(f"phase noise {n:g} rise (0.3)", controller={"phase_noise": n}) for n in (0.0, 0.15)),
+    *(Variant(f"rise {r:g} s (2)", controller={"rise_s": r}) for r in (1.5, 3.0)),
+    *(Variant(f"Nx {nx} (5)", controller={"nx": nx}) for nx in (4, 6)),
+    Variant("phase updated every 10 cycles (1)", controller={"update_cycles": 10}),
+    Variant("constrained contraction (off)", physics={"constrain_contraction": True}),
+    Variant("+ torque limit 0.7, shear 30", physics={"torque_limit": 0.7, "shear": 30.0}),
+    Variant("+ torque limit 0.8, shear 30", physics={"torque_limit": 0.8, "shear": 30.0}),
+    Variant("+ torque limit 0.7, damping 5", physics={"torque_limit": 0.7, "damping": 5.0}),
+    Variant("+ torque limit 0.8, dt 0.005 s", physics={"torque_limit": 0.8, "dt": 0.005}),
+    Variant(
+        "+ torque limit 0.65, shear 30, no phase noise",
+        physics={"torque_limit": 0.65, "shear": 30.0},
+        controller={"phase_noise": 0.0},
+    ),
+]
+"""One published number at a time, below and above its value (in brackets), then pairs of the
+numbers that move the two sizes apart ("+"): how each moves the speeds of 10 and 100 particles
+(`--sensitivity`)."""
+
+
 LIGHT_FACT = {11: 16.0, 101: 8.0, 1001: 4.0, 10001: 2.0}
 """The published main's lamp distance in DPD by swarm size (up to the key): lamp_dpd -1."""
 
@@ -268,6 +307,97 @@ def plot(results: dict[str, dict[int, list[float]]], path: Path) -> None:
     plt.close(fig)
 
 
+def plot_sensitivity(results: dict[str, dict[int, list[float]]], path: Path) -> None:
+    """Left: each variant's mean speed with 10 particles (x) against 100 (y), beside the paper's
+    pair. Right: each variant's speeds as multiples of the defaults', beside the multiples the
+    paper's numbers would need; rows sorted by the 100-particle multiple."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    small, large = 10, 100
+    paper = {n: TABLE_S3_MM_S[n][0.0] for n in (small, large)}
+    colours = {small: "tab:blue", large: "tab:orange"}
+    names = list(results)
+    mean = {name: {n: float(np.mean(results[name][n])) for n in (small, large)} for name in names}
+    sem = {
+        name: {n: float(np.std(results[name][n], ddof=1) / np.sqrt(len(results[name][n])))
+               for n in (small, large)}
+        for name in names
+    }  # fmt: skip
+    base = mean[names[0]]
+    fig, (ax, bars) = plt.subplots(1, 2, figsize=(16, 8.2), width_ratios=(1, 1.1))
+    ax.add_patch(plt.Rectangle(
+        (paper[small].mean - paper[small].sd, paper[large].mean - paper[large].sd),
+        2 * paper[small].sd, 2 * paper[large].sd, color="gold", alpha=0.35, lw=0,
+    ))  # fmt: skip
+    ax.plot(paper[small].mean, paper[large].mean, "*", ms=16, color="goldenrod",
+            label="Table S3 (mean; box: ±1 sd)")  # fmt: skip
+    top = 1.05 * max([1.8] + [m[n] for m in mean.values() for n in (small, large)])
+    ax.plot([0, top], [0, top], color="grey", lw=0.8, ls="--", label="as fast at 100 as at 10")
+    ratio = paper[large].mean / paper[small].mean
+    ax.plot([0, top], [0, top * ratio], color="goldenrod", lw=0.8, ls=":",
+            label=f"the paper's ratio, 100 / 10 = {ratio:.2f}")  # fmt: skip
+    # Pairs ("+") are drawn apart and lettered: they crowd the paper's box.
+    letters = iter("ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+    shown = {
+        name: f"{next(letters)}: {name[2:]}" if name.startswith("+") else name for name in names
+    }
+    for name in names:
+        x, y = mean[name][small], mean[name][large]
+        default, pair = name == names[0], name.startswith("+")
+        ax.errorbar(x, y, xerr=sem[name][small], yerr=sem[name][large],
+                    fmt="D" if pair else "o", color="black" if default else
+                    ("tab:red" if pair else "tab:blue"), ms=6 if default or pair else 4,
+                    elinewidth=0.8, zorder=3)  # fmt: skip
+        far = abs(x - base[small]) > 0.12 or abs(y - base[large]) > 0.12
+        if pair:
+            ax.annotate(shown[name][0], (x, y), xytext=(5, -9), textcoords="offset points",
+                        fontsize=9, color="tab:red", fontweight="bold")  # fmt: skip
+        elif default or far:
+            ax.annotate(name, (x, y), xytext=(5, 3), textcoords="offset points", fontsize=7.5,
+                        fontweight="bold" if default else "normal")  # fmt: skip
+    ax.set_xlim(-0.05, top)
+    ax.set_ylim(-0.05, top)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"speed toward the light, {small} particles (mm/s)")
+    ax.set_ylabel(f"speed toward the light, {large} particles (mm/s)")
+    ax.set_title(
+        "Blue: one published number changed (named when it moved a speed by more\n"
+        "than 0.12 mm/s; all on the right); red: pairs A-E; bars: standard error"
+    )
+    ax.legend(loc="upper left", fontsize=8)
+
+    singles = [name for name in names[1:] if not name.startswith("+")]
+    pairs = [name for name in names[1:] if name.startswith("+")]
+    rows = sorted(singles, key=lambda name: mean[name][large] / base[large]) + pairs[::-1]
+    row_y = np.arange(len(rows))
+    for offset, n in ((-0.2, small), (0.2, large)):
+        multiple = [mean[name][n] / base[n] for name in rows]
+        error = [sem[name][n] / base[n] for name in rows]
+        bars.barh(row_y + offset, multiple, height=0.4, xerr=error, color=colours[n], alpha=0.8,
+                  error_kw={"elinewidth": 0.6}, label=f"{n} particles")  # fmt: skip
+        needed = paper[n].mean / base[n]
+        bars.axvline(needed, color=colours[n], ls="--", lw=1.2,
+                     label=f"the paper's {n}: x{needed:.2f} ours")  # fmt: skip
+    bars.axvline(1.0, color="black", lw=0.8)
+    bars.set_yticks(row_y, [shown[name] for name in rows], fontsize=8)
+    for label, name in zip(bars.get_yticklabels(), rows, strict=True):
+        label.set_color("tab:red" if name.startswith("+") else "black")
+    if pairs:
+        bars.axhline(len(singles) - 0.5, color="grey", lw=0.8)
+    bars.set_xlabel("speed as a multiple of ours with the published defaults")
+    bars.set_title(f"Defaults: {base[small]:.2f} mm/s (10 particles), {base[large]:.2f} (100)")
+    bars.legend(loc="lower right", fontsize=8)
+    seeds = len(results[names[0]][small])
+    fig.suptitle(f"Which published number could explain Table S3? 0 % dead, {seeds} seeds per "
+                 "point, 2 h, the first 30 min left out")  # fmt: skip
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100])
@@ -279,14 +409,30 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("docs/world"), help="figure and JSON")
     parser.add_argument("--speeds-only", action="store_true",
                         help="no firmware line, no boiling figure (they take minutes)")  # fmt: skip
+    parser.add_argument("--sensitivity", action="store_true",
+                        help="run SENSITIVITY (one number changed at a time) at 10 and 100 "
+                        "particles instead; writes sensitivity.json and .png")  # fmt: skip
+    parser.add_argument("--replot", action="store_true",
+                        help="with --sensitivity: redraw the figure from --out's JSON")  # fmt: skip
     args = parser.parse_args()
     if not 0 <= args.skip < args.duration or args.seeds < 2:
         parser.error("need 0 <= --skip < --duration and at least 2 seeds")
     if args.duration % SAMPLE_S or args.skip % SAMPLE_S:
         parser.error(f"--duration and --skip must be multiples of {SAMPLE_S:g} s")
-    if args.variants and not all(0 <= i < len(VARIANTS) for i in args.variants):
-        parser.error(f"--variants are indices 0 to {len(VARIANTS) - 1}")
-    chosen = [VARIANTS[i] for i in args.variants] if args.variants else VARIANTS
+    if args.replot:
+        if not args.sensitivity:
+            parser.error("--replot redraws the --sensitivity figure; give both")
+        stored = json.loads((args.out / "sensitivity.json").read_text())["speeds_mm_s"]
+        runs = {name: {int(n): v for n, v in per.items()} for name, per in stored.items()}
+        plot_sensitivity(runs, args.out / "sensitivity.png")
+        print(f"redrew sensitivity.png in {args.out}")
+        return 0
+    if args.sensitivity:
+        args.sizes, args.speeds_only = [10, 100], True
+    table = SENSITIVITY if args.sensitivity else VARIANTS
+    if args.variants and not all(0 <= i < len(table) for i in args.variants):
+        parser.error(f"--variants are indices 0 to {len(table) - 1}")
+    chosen = [table[i] for i in args.variants] if args.variants else table
     jobs = [(v, n, s) for n in args.sizes for v in chosen for s in range(args.seeds)]
     print(f"{len(jobs)} runs on {args.workers} processes; load {os.getloadavg()[0]:.1f}")
     began = time.perf_counter()
@@ -318,6 +464,22 @@ def main() -> int:
     (args.out).mkdir(parents=True, exist_ok=True)
     summary = {"duration_s": args.duration, "skip_s": args.skip, "speeds_mm_s": results,
                "measures_mm_s": measured, "load": os.getloadavg()[0]}  # fmt: skip
+    if args.sensitivity:
+        stored = args.out / "sensitivity.json"
+        if args.variants and stored.is_file():  # a few rerun or added: merged into the rest
+            earlier = json.loads(stored.read_text())
+            order = [v.name for v in SENSITIVITY]
+            for key in ("speeds_mm_s", "measures_mm_s"):
+                merged = {**earlier[key], **summary[key]}
+                summary[key] = {name: merged[name] for name in order if name in merged}
+        if SENSITIVITY[0].name not in summary["speeds_mm_s"]:
+            parser.error("the figure compares with the defaults: run --variants 0 too")
+        stored.write_text(json.dumps(summary, indent=1))
+        results = {name: {int(n): v for n, v in per.items()}
+                   for name, per in summary["speeds_mm_s"].items()}  # fmt: skip
+        plot_sensitivity(results, args.out / "sensitivity.png")
+        print(f"wrote sensitivity.json and sensitivity.png into {args.out}")
+        return 0
     if args.speeds_only:
         (args.out / "fidelity.json").write_text(json.dumps(summary, indent=1))
         plot(results, args.out / "fidelity.png")

@@ -13,6 +13,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 
@@ -56,10 +57,14 @@ COLOURS = {10: "tab:blue", 30: "tab:purple", 100: "tab:orange", 1000: "tab:green
 
 
 def gather(results: Path, names: tuple[str, ...], metric: str) -> Cells:
-    """One metric from several study folders (one per set of sizes), by size."""
+    """One metric from several study folders (sets of sizes, or of columns of the same sizes),
+    by size; a cell run in two folders is taken from the first."""
     ours: Cells = defaultdict(list)
     for name in names:
-        ours.update(read(results / name, metric))
+        for n, cells in read(results / name, metric).items():
+            have = {value for value, *_ in ours[n]}
+            ours[n].extend(cell for cell in cells if cell[0] not in have)
+            ours[n].sort()
     return ours
 
 
@@ -92,7 +97,7 @@ def save(fig: plt.Figure, path: Path) -> Path:
 
 
 def dead_figures(results: Path, out: Path) -> list[Path]:
-    ours = gather(results, ("dead-small", "dead-1000"), "speed_mm_s")
+    ours = gather(results, ("dead-small", "dead-high", "dead-1000"), "speed_mm_s")
     if not ours:
         return []
     fig, (absolute, relative) = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120)
@@ -128,17 +133,21 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
     paths = [save(fig, out / "dead.png")]
 
     variants = {
-        "published defaults": "dead-small",
-        "static friction 1 x μ g (not 2)": "dead-static1",
-        "no phase noise": "dead-nophasenoise",
+        "published defaults": ("dead-small", "dead-1000"),
+        "static friction 1 x μ g (not 2)": ("dead-static1",),
+        "no phase noise": ("dead-nophasenoise",),
+        "both of these": ("dead-both",),
+        "torque limit 0.7 (not 0.5), shear 30 (not 40)": ("dead-cand-small", "dead-cand-1000"),
     }
-    found = {label: read(results / name, "speed_mm_s") for label, name in variants.items()}
+    found = {label: gather(results, names, "speed_mm_s") for label, names in variants.items()}
     found = {label: cells for label, cells in found.items() if cells}
+    sizes = sorted({n for label, cells in found.items() if label != "published defaults"
+                    for n in cells})  # fmt: skip
     if len(found) > 1:
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120, sharey=False)
-        for ax, n in zip(axes, (10, 100), strict=True):
+        fig, axes = plt.subplots(1, len(sizes), figsize=(5.5 * len(sizes), 4.6), dpi=120)
+        for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
             published = paper.TABLE_S3_MM_S[n]
-            top = max(f for variant in found.values() for f, *_ in variant.get(n, []))
+            top = max(f for variant in found.values() for f, *_ in variant.get(n, []) if f <= 0.5)
             px = [f for f in published if f <= top + 1e-9]
             ax.errorbar(
                 [100 * f for f in px], [published[f].mean for f in px],
@@ -146,7 +155,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
                 capsize=3, lw=1, label="paper (Table S3)",
             )  # fmt: skip
             for label, variant in found.items():
-                row = variant.get(n, [])
+                row = [cell for cell in variant.get(n, []) if cell[0] <= top + 1e-9]
                 if not row:
                     continue
                 runs = min(r for *_, r in row)
@@ -155,13 +164,13 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
                     yerr=sds_of(row), fmt="o-", ms=3.5,
                     capsize=2, lw=1, label=f"ours, {label} ({runs} seeds)",
                 )  # fmt: skip
-            ax.set_title(f"{n} particles", fontsize=10)
+            ax.set_title(f"{n:,} particles", fontsize=10)
             ax.set_xlabel("dead particles (%)")
             ax.set_ylabel("speed toward the light (mm/s)")
             ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7.5)
-        fig.suptitle("Table S3 with one published number changed (2 h, first 30 min left out)")
+        fig.suptitle("Table S3 with published numbers changed (2 h, first 30 min left out)")
         paths.append(save(fig, out / "dead-variants.png"))
     return paths
 

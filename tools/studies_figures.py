@@ -137,7 +137,11 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         "static friction 1 x μ g (not 2)": ("dead-static1",),
         "no phase noise": ("dead-nophasenoise",),
         "both of these": ("dead-both",),
-        "torque limit 0.7 (not 0.5), shear 30 (not 40)": ("dead-cand-small", "dead-cand-1000"),
+        "torque limit 0.7 (not 0.5), shear 30 (not 40)": (
+            "dead-cand-small",
+            "dead-cand-1000",
+            "dead-cand-1000b",
+        ),
     }
     found = {label: gather(results, names, "speed_mm_s") for label, names in variants.items()}
     found = {label: cells for label, cells in found.items() if cells}
@@ -155,13 +159,14 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
                 capsize=3, lw=1, label="paper (Table S3)",
             )  # fmt: skip
             for label, variant in found.items():
+                colour = f"C{list(variants).index(label)}"  # the same in every panel
                 row = [cell for cell in variant.get(n, []) if cell[0] <= top + 1e-9]
                 if not row:
                     continue
                 runs = min(r for *_, r in row)
                 ax.errorbar(
                     [100 * f + 0.5 * len(ax.lines) for f, *_ in row], [m for _, m, _, _ in row],
-                    yerr=sds_of(row), fmt="o-", ms=3.5,
+                    yerr=sds_of(row), fmt="o-", ms=3.5, color=colour,
                     capsize=2, lw=1, label=f"ours, {label} ({runs} seeds)",
                 )  # fmt: skip
             ax.set_title(f"{n:,} particles", fontsize=10)

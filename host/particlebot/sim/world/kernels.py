@@ -104,33 +104,46 @@ _FAST = {"contract", "arcp", "nsz", "reassoc"}
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
-def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
+def _magnet_law(
+    gap: float, strength: float, low: float, clamp_gap: float, blend_gap: float, a: float
+) -> float:
     """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
-    factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
-    clamp_gap = prm[P_CLAMP_GAP]
-    blend_gap = prm[P_BLEND_GAP]
-    low = prm[P_CLAMP_FORCE]
-    if gap < clamp_gap:
-        return low * strength
-    a = prm[P_ATTRACTION]
-    if gap < blend_gap:
-        top = a / (blend_gap * blend_gap)
-        return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
-    return strength * a / (gap * gap)
+    factors): the clamp `low` below the clamp gap, a linear blend up to the blend gap, A / gap^2.
+    Branch-free (each piece computed, one chosen), so that a loop of pairs vectorises."""
+    top = a / (blend_gap * blend_gap)
+    blend = low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low)
+    far_gap = max(gap, blend_gap)
+    far = a / (far_gap * far_gap)
+    return strength * (low if gap < clamp_gap else (blend if gap < blend_gap else far))
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
+    """_magnet_law with the parameters of `prm`."""
+    return _magnet_law(
+        gap, strength, prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP], prm[P_BLEND_GAP], prm[P_ATTRACTION]
+    )
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _contact_law(
+    nx: float, ny: float, overlap: float, spring: float, damping: float, shear: float,
+    dvx: float, dvy: float,
+) -> tuple[float, float]:  # fmt: skip
+    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
+    minus first), shear on its tangential part."""
+    vn = dvx * nx + dvy * ny
+    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
+    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
+    return fx, fy
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _contact(
     nx: float, ny: float, overlap: float, spring: float, dvx: float, dvy: float, prm: FloatArray
 ) -> tuple[float, float]:
-    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
-    minus first), shear on its tangential part."""
-    vn = dvx * nx + dvy * ny
-    shear = prm[P_SHEAR]
-    damping = prm[P_DAMPING]
-    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
-    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
-    return fx, fy
+    """_contact_law with the damping and shear of `prm`."""
+    return _contact_law(nx, ny, overlap, spring, prm[P_DAMPING], prm[P_SHEAR], dvx, dvy)
 
 
 @numba.njit(cache=True, inline="always")
@@ -335,63 +348,144 @@ def _join(i: int, j: int, kind_i: int, flags: ByteArray) -> None:
         flags[F_JOINED, j] = 1
 
 
-@numba.njit(cache=True, inline="always", fastmath=_FAST)
-def _pair(
-    i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
-    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
-    prm: FloatArray,
-) -> tuple[float, float, float, float]:  # fmt: skip
-    """One listed pair (j > i, rel = pj - pi) within the cutoff: j gets -f and |f| in its sum
-    at once; returns what i gets (f and its contact and attraction magnitudes)."""
-    c = ri + body[B_R, j]
-    reach = c + prm[P_CUTOFF]
-    if d2 >= reach * reach or d2 == 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    px, py, contact, attract, touching = _law(j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm)
-    body[B_FR, j] += contact
-    body[B_FA, j] += attract
-    body[B_FX, j] -= px
-    body[B_FY, j] -= py
-    if touching and kind_i != flags[F_KIND, j]:
-        _join(i, j, kind_i, flags)
-    return px, py, contact, attract
+PAIR_BLOCK = 1024
+"""Pairs gathered before they are evaluated together: the force law then runs as one loop over
+contiguous arrays, which the compiler vectorises (no branch to mispredict, several pairs per
+instruction)."""
+PAIR_INDEX_ROWS = 3  # a pair block's integers: second body, first body; each particle's end
+PAIR_INPUTS = 6  # its floats: dx, dy, contact distance, dvx, dvy, magnet strength (the inputs),
+PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes, touching (0 / 1)
+
+
+@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
+def _pair_forces(
+    count: int, dx: FloatArray, dy: FloatArray, c: FloatArray, dvx: FloatArray, dvy: FloatArray,
+    strength: FloatArray, law: tuple[float, float, float, float, float, float, float, float],
+    fx: FloatArray, fy: FloatArray, contact: FloatArray, attract: FloatArray,
+    touching: FloatArray,
+) -> None:  # fmt: skip
+    """The law of `count` pairs within reach (force on the first body from the second, rel =
+    second - first at distance > 0): contact (spring, dashpot, shear) when they overlap, else the
+    magnets; the contact and attraction magnitudes; whether they touch (overlap, or a gap below
+    the magnets' lock). Branch-free and over plain arrays (the numpy error model: no division
+    check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap, blend
+    gap, A, touch gap."""
+    spring, damping, shear, low, clamp_gap, blend_gap, a, touch_gap = law
+    for q in range(count):
+        d = math.sqrt(dx[q] * dx[q] + dy[q] * dy[q])
+        nx = dx[q] / d
+        ny = dy[q] / d
+        overlap = c[q] - d
+        px, py = _contact_law(nx, ny, overlap, spring, damping, shear, dvx[q], dvy[q])
+        pull = _magnet_law(-overlap, strength[q], low, clamp_gap, blend_gap, a)
+        pressed = overlap > 0.0
+        fx[q] = px if pressed else pull * nx
+        fy[q] = py if pressed else pull * ny
+        contact[q] = math.sqrt(px * px + py * py) if pressed else 0.0
+        attract[q] = 0.0 if pressed else pull
+        touching[q] = 1.0 if -overlap < touch_gap else 0.0
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST, error_model="numpy")
+def _pair_block(
+    count: int, first: int, last: int, index: IntArray, values: FloatArray, pos: FloatArray,
+    vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """Evaluates the `count` gathered pairs (index[1, q], index[0, q]) of particles
+    first..last-1 (particle p's pairs end at index[2, p - first], in list order) and adds them up
+    in that order: j gets -f and |f| as each pair comes, p its own sum after its last pair."""
+    partner = index[0]
+    ends = index[2]
+    inputs = values[:PAIR_INPUTS]
+    outputs = values[PAIR_INPUTS:]
+    for q in range(count):
+        j = partner[q]
+        i = index[1, q]
+        inputs[0, q] = pos[0, j] - pos[0, i]
+        inputs[1, q] = pos[1, j] - pos[1, i]
+        inputs[2, q] = body[B_R, i] + body[B_R, j]
+        inputs[3, q] = vel_old[0, j] - vel_old[0, i]
+        inputs[4, q] = vel_old[1, j] - vel_old[1, i]
+        inputs[5, q] = body[B_MAG, i] * body[B_MAG, j]
+    law = (
+        prm[P_SPRING], prm[P_DAMPING], prm[P_SHEAR], prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP],
+        prm[P_BLEND_GAP], prm[P_ATTRACTION], prm[P_TOUCH_GAP],
+    )  # fmt: skip
+    _pair_forces(
+        count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
+        outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
+    )  # fmt: skip
+    end = 0
+    for p in range(first, last):
+        kind_p = flags[F_KIND, p]
+        fx = 0.0
+        fy = 0.0
+        f_contact = 0.0
+        f_attract = 0.0
+        begin = end
+        end = ends[p - first]
+        for q in range(begin, end):
+            j = partner[q]
+            px = outputs[0, q]
+            py = outputs[1, q]
+            contact = outputs[2, q]
+            attract = outputs[3, q]
+            body[B_FR, j] += contact
+            body[B_FA, j] += attract
+            body[B_FX, j] -= px
+            body[B_FY, j] -= py
+            if outputs[4, q] != 0.0 and kind_p != flags[F_KIND, j]:
+                _join(p, j, kind_p, flags)
+            fx += px
+            fy += py
+            f_contact += contact
+            f_attract += attract
+        body[B_FX, p] += fx
+        body[B_FY, p] += fy
+        body[B_FR, p] += f_contact
+        body[B_FA, p] += f_attract
 
 
 @numba.njit(cache=True, fastmath=_FAST)
 def _pairs(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
-    nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+    nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray, pair_values: FloatArray,
+    prm: FloatArray,
 ) -> None:  # fmt: skip
-    """Second pass: every listed pair (i in lo..hi, j > i) once, from the new positions and old
-    velocities; i gets f and j gets -f, both get |f| in their contact or attraction sum."""
+    """Second pass: every listed pair (i in lo..hi, j > i) within reach once, from the new
+    positions and old velocities; i gets f and j gets -f, both get |f| in their contact or
+    attraction sum. The pairs within reach are picked out first (branch-free: each listed
+    partner is written and kept by adding the test), a block at a time into the scratch
+    pair_index (PAIR_INDEX_ROWS, block) and pair_values (PAIR_VALUE_ROWS, block), then
+    evaluated together (_pair_block)."""
+    cutoff = prm[P_CUTOFF]
+    index = pair_index
+    values = pair_values
+    if nbr.shape[1] > index.shape[1]:  # lists wider than the scratch (never in a real swarm)
+        index = np.empty((PAIR_INDEX_ROWS, nbr.shape[1]), dtype=np.int64)
+        values = np.empty((PAIR_VALUE_ROWS, nbr.shape[1]))
+    block = index.shape[1]
+    count = 0
+    first = lo
     for i in range(lo, hi):
+        if count + ncount[i] > block or i - first == block:
+            _pair_block(count, first, i, index, values, pos, vel_old, body, flags, prm)
+            count = 0
+            first = i
         xi = pos[0, i]
         yi = pos[1, i]
-        vxi = vel_old[0, i]
-        vyi = vel_old[1, i]
         ri = body[B_R, i]
-        magi = body[B_MAG, i]
-        kind_i = flags[F_KIND, i]
-        fx = 0.0
-        fy = 0.0
-        f_contact = 0.0
-        f_attract = 0.0
         for k in range(ncount[i]):
             j = nbr[i, k]
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
-            px, py, contact, attract = _pair(
-                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
-                flags, prm,
-            )  # fmt: skip
-            fx += px
-            fy += py
-            f_contact += contact
-            f_attract += attract
-        body[B_FX, i] += fx
-        body[B_FY, i] += fy
-        body[B_FR, i] += f_contact
-        body[B_FA, i] += f_attract
+            d2 = dx * dx + dy * dy
+            reach = ri + body[B_R, j] + cutoff
+            index[0, count] = j
+            index[1, count] = i
+            count += (d2 < reach * reach) & (d2 != 0.0)
+        index[2, i - first] = count
+    _pair_block(count, first, hi, index, values, pos, vel_old, body, flags, prm)
 
 
 @numba.njit(cache=True)
@@ -855,14 +949,18 @@ def _kinematics_chunks(
 @numba.njit(parallel=True, cache=True)
 def _pairs_chunks(
     bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
-    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
     """_pairs over the even (parity 0) or odd (1) chunks in parallel: they write only their own
     chunk and the next, which no other chunk of the same parity touches."""
     chunks = bounds.shape[0] - 1
     for half in numba.prange((chunks - parity + 1) // 2):
         c = 2 * half + parity
-        _pairs(bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, prm)
+        _pairs(
+            bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, pair_index[c],
+            pair_values[c], prm,
+        )  # fmt: skip
 
 
 @numba.njit(parallel=True, cache=True)
@@ -884,10 +982,12 @@ def advance(
     steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
     vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
     ncount: npt.NDArray[np.int32], rects: FloatArray, circles: FloatArray, objects: FloatArray,
-    acc: FloatArray, bounds: IntArray, prm: FloatArray,
+    acc: FloatArray, bounds: IntArray, pair_index: IntArray, pair_values: FloatArray,
+    prm: FloatArray,
 ) -> tuple[ListArray, int]:  # fmt: skip
     """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
     chunk everything runs inline (no parallel region to start), with several in parallel.
+    pair_index and pair_values are the pair pass's scratch, one (rows, block) per chunk.
     Returns the neighbour lists' array (possibly a new, wider one) and how many times the lists
     were rebuilt."""
     n = pos.shape[1]
@@ -908,10 +1008,13 @@ def advance(
             )
             rebuilds += 1
         if inline:
-            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, pair_index[0], pair_values[0], prm)
         else:
-            _pairs_chunks(bounds, 0, pos, vel_old, body, flags, nbr, ncount, prm)
-            _pairs_chunks(bounds, 1, pos, vel_old, body, flags, nbr, ncount, prm)
+            for parity in (0, 1):
+                _pairs_chunks(
+                    bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
+                    pair_values, prm,
+                )  # fmt: skip
         if inline:
             _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
         else:

@@ -200,6 +200,8 @@ class World:
         chunks = 1 if n < PARALLEL_FROM else CHUNKS
         self._bounds = np.linspace(0, n, chunks + 1).astype(np.int64)
         self._acc = np.zeros((chunks, len(self.objects), k.ACC_COLS))
+        self._pair_index = np.zeros((chunks, k.PAIR_INDEX_ROWS, k.PAIR_BLOCK), dtype=np.int64)
+        self._pair_values = np.zeros((chunks, k.PAIR_VALUE_ROWS, k.PAIR_BLOCK))
         self._rects = self.arena.rect_array()
         self._circles = self.arena.circle_array()
         self._light = LightField(self.lamp)
@@ -353,7 +355,8 @@ class World:
                 self._nbr, rebuilds = k.advance(
                     rows, self._targets, self._ext, self._pos, self._ref, self._vel,
                     self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._rects,
-                    self._circles, self._objects, self._acc, self._bounds, self._prm,
+                    self._circles, self._objects, self._acc, self._bounds, self._pair_index,
+                    self._pair_values, self._prm,
                 )  # fmt: skip
             self.rebuilds += rebuilds
             self._steps += rows

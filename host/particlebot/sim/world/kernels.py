@@ -839,13 +839,39 @@ def _fill_chunks(
     return most
 
 
+BODY_KEPT = B_FX
+"""Rows of `body` that carry over from step to step (r, the force sums the servo reads, the
+magnet factor); force x and y are a step's own, cleared before use, so a re-ordering skips them."""
+
+
 @numba.njit(cache=True)
-def _permute(rows: npt.NDArray, order: IntArray) -> None:
-    """rows[:, p] = rows[:, order[p]] for every p, through a scratch copy."""
-    scratch = rows.copy()
-    for r in range(rows.shape[0]):
-        for p in range(rows.shape[1]):
-            rows[r, p] = scratch[r, order[p]]
+def _reorder(
+    order: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, ext: IntArray,
+) -> None:  # fmt: skip
+    """Every per-particle row (but a step's own force rows) and `ext` re-ordered: slot p takes
+    what slot order[p] held. Positions and velocities go through ref and vel_old, which a list
+    build then wants equal to them anyway; the rest through copies."""
+    n = pos.shape[1]
+    for axis in range(2):
+        for p in range(n):
+            ref[axis, p] = pos[axis, order[p]]
+        for p in range(n):
+            vel_old[axis, p] = vel[axis, order[p]]
+    pos[:, :] = ref
+    vel[:, :] = vel_old
+    kept = body[:BODY_KEPT]
+    had = kept.copy()
+    for r in range(BODY_KEPT):
+        for p in range(n):
+            kept[r, p] = had[r, order[p]]
+    was = flags.copy()
+    for r in range(FLAG_ROWS):
+        for p in range(n):
+            flags[r, p] = was[r, order[p]]
+    index = ext.copy()
+    for p in range(n):
+        ext[p] = index[order[p]]
 
 
 @numba.njit(cache=True)
@@ -880,16 +906,14 @@ def _prepare(
     n = pos.shape[1]
     ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
     if sort:
-        _permute(pos, members)
-        _permute(vel, members)
-        _permute(body, members)
-        _permute(flags, members)
-        _permute(ext.reshape(1, n), members)
-        _permute(cells.reshape(1, n), members)  # the same grid, now in cell order
-        vel_old[:, :] = vel
-    for i in range(n):
-        ref[0, i] = pos[0, i]
-        ref[1, i] = pos[1, i]
+        _reorder(members, pos, ref, vel, vel_old, body, flags, ext)
+        for c in range(ncx * ncy):  # the same grid, now in cell order
+            for p in range(start[c], start[c + 1]):
+                cells[p] = c
+    else:
+        for i in range(n):
+            ref[0, i] = pos[0, i]
+            ref[1, i] = pos[1, i]
     _row_bounds(start, ncx, ncy, bounds)
     return ncx, ncy, cells, start
 

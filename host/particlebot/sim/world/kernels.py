@@ -352,7 +352,7 @@ PAIR_BLOCK = 1024
 """Pairs gathered before they are evaluated together: the force law then runs as one loop over
 contiguous arrays, which the compiler vectorises (no branch to mispredict, several pairs per
 instruction)."""
-PAIR_INDEX_ROWS = 3  # a pair block's integers: second body, first body; each particle's end
+PAIR_INDEX_ROWS = 2  # a pair block's integers: second body, first body
 PAIR_INPUTS = 6  # its floats: dx, dy, contact distance, dvx, dvy, magnet strength (the inputs),
 PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes, touching (0 / 1)
 
@@ -386,16 +386,14 @@ def _pair_forces(
         touching[q] = 1.0 if -overlap < touch_gap else 0.0
 
 
-@numba.njit(cache=True, inline="always", fastmath=_FAST, error_model="numpy")
+@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
 def _pair_block(
-    count: int, first: int, last: int, index: IntArray, values: FloatArray, pos: FloatArray,
-    vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> None:  # fmt: skip
-    """Evaluates the `count` gathered pairs (index[1, q], index[0, q]) of particles
-    first..last-1 (particle p's pairs end at index[2, p - first], in list order) and adds them up
-    in that order: j gets -f and |f| as each pair comes, p its own sum after its last pair."""
+    """Evaluates the `count` gathered pairs (i = index[1, q], j = index[0, q]) and adds them up
+    in their order: i gets f and j gets -f, both |f| in their contact or attraction sum."""
     partner = index[0]
-    ends = index[2]
     inputs = values[:PAIR_INPUTS]
     outputs = values[PAIR_INPUTS:]
     for q in range(count):
@@ -415,35 +413,57 @@ def _pair_block(
         count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
         outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
     )  # fmt: skip
-    end = 0
-    for p in range(first, last):
-        kind_p = flags[F_KIND, p]
-        fx = 0.0
-        fy = 0.0
-        f_contact = 0.0
-        f_attract = 0.0
-        begin = end
-        end = ends[p - first]
-        for q in range(begin, end):
-            j = partner[q]
-            px = outputs[0, q]
-            py = outputs[1, q]
-            contact = outputs[2, q]
-            attract = outputs[3, q]
-            body[B_FR, j] += contact
-            body[B_FA, j] += attract
-            body[B_FX, j] -= px
-            body[B_FY, j] -= py
-            if outputs[4, q] != 0.0 and kind_p != flags[F_KIND, j]:
-                _join(p, j, kind_p, flags)
-            fx += px
-            fy += py
-            f_contact += contact
-            f_attract += attract
-        body[B_FX, p] += fx
-        body[B_FY, p] += fy
-        body[B_FR, p] += f_contact
-        body[B_FA, p] += f_attract
+    for q in range(count):
+        j = partner[q]
+        i = index[1, q]
+        px = outputs[0, q]
+        py = outputs[1, q]
+        contact = outputs[2, q]
+        attract = outputs[3, q]
+        body[B_FX, i] += px
+        body[B_FY, i] += py
+        body[B_FR, i] += contact
+        body[B_FA, i] += attract
+        body[B_FX, j] -= px
+        body[B_FY, j] -= py
+        body[B_FR, j] += contact
+        body[B_FA, j] += attract
+        kind_i = flags[F_KIND, i]
+        if outputs[4, q] != 0.0 and kind_i != flags[F_KIND, j]:
+            _join(i, j, kind_i, flags)
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pick(
+    i: int, j: int, xi: float, yi: float, ri: float, cutoff: float, count: int, index: IntArray,
+    pos: FloatArray, body: FloatArray,
+) -> int:  # fmt: skip
+    """Puts the pair (i, j) at the end of the block and keeps it if it is within reach
+    (branch-free: the test is a coin toss a branch predictor loses). Returns the new count."""
+    dx = pos[0, j] - xi
+    dy = pos[1, j] - yi
+    d2 = dx * dx + dy * dy
+    reach = ri + body[B_R, j] + cutoff
+    index[0, count] = j
+    index[1, count] = i
+    return count + ((d2 < reach * reach) & (d2 != 0.0))
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pick_each(
+    i: int, candidates: IntArray, count: int, index: IntArray, values: FloatArray,
+    pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> int:  # fmt: skip
+    """_pick for more candidates than a block holds (never in a real swarm: a thousand
+    particles within the list radius), evaluating the block whenever it is full."""
+    for j in candidates:
+        count = _pick(
+            i, j, pos[0, i], pos[1, i], body[B_R, i], prm[P_CUTOFF], count, index, pos, body
+        )
+        if count == index.shape[1]:
+            _pair_block(count, index, values, pos, vel_old, body, flags, prm)
+            count = 0
+    return count
 
 
 @numba.njit(cache=True, fastmath=_FAST)
@@ -454,38 +474,74 @@ def _pairs(
 ) -> None:  # fmt: skip
     """Second pass: every listed pair (i in lo..hi, j > i) within reach once, from the new
     positions and old velocities; i gets f and j gets -f, both get |f| in their contact or
-    attraction sum. The pairs within reach are picked out first (branch-free: each listed
-    partner is written and kept by adding the test), a block at a time into the scratch
-    pair_index (PAIR_INDEX_ROWS, block) and pair_values (PAIR_VALUE_ROWS, block), then
-    evaluated together (_pair_block)."""
+    attraction sum. The pairs within reach are picked out first (_pick), a block at a time into
+    the scratch pair_index (PAIR_INDEX_ROWS, block) and pair_values (PAIR_VALUE_ROWS, block),
+    then evaluated together (_pair_block). The sums do not depend on where blocks end (the
+    vectorised law gives each pair the same bits as one at a time; a test checks)."""
     cutoff = prm[P_CUTOFF]
-    index = pair_index
-    values = pair_values
-    if nbr.shape[1] > index.shape[1]:  # lists wider than the scratch (never in a real swarm)
-        index = np.empty((PAIR_INDEX_ROWS, nbr.shape[1]), dtype=np.int64)
-        values = np.empty((PAIR_VALUE_ROWS, nbr.shape[1]))
-    block = index.shape[1]
+    block = pair_index.shape[1]
     count = 0
-    first = lo
     for i in range(lo, hi):
-        if count + ncount[i] > block or i - first == block:
-            _pair_block(count, first, i, index, values, pos, vel_old, body, flags, prm)
+        if count + ncount[i] > block:
+            _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
             count = 0
-            first = i
+        if ncount[i] > block:
+            count = _pick_each(
+                i, nbr[i, : ncount[i]].astype(np.int64), count, pair_index, pair_values, pos,
+                vel_old, body, flags, prm,
+            )  # fmt: skip
+            continue
         xi = pos[0, i]
         yi = pos[1, i]
         ri = body[B_R, i]
         for k in range(ncount[i]):
-            j = nbr[i, k]
-            dx = pos[0, j] - xi
-            dy = pos[1, j] - yi
-            d2 = dx * dx + dy * dy
-            reach = ri + body[B_R, j] + cutoff
-            index[0, count] = j
-            index[1, count] = i
-            count += (d2 < reach * reach) & (d2 != 0.0)
-        index[2, i - first] = count
-    _pair_block(count, first, hi, index, values, pos, vel_old, body, flags, prm)
+            count = _pick(i, nbr[i, k], xi, yi, ri, cutoff, count, pair_index, pos, body)
+    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs_cells(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    cells: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs straight from the grid a list build has just made (the particles in cell order),
+    for a step that builds the lists: each particle meets the candidates _fill_lists would list,
+    in the same order, so the same pairs within reach (all within the list radius) come in the
+    same order as from the lists, and the sums are bit for bit the same. The lists themselves
+    are filled later, only if a step needs them (see advance)."""
+    cutoff = prm[P_CUTOFF]
+    block = pair_index.shape[1]
+    count = 0
+    for i in range(lo, hi):
+        cx = cells[i] % ncx
+        cy = cells[i] // ncx
+        row = cy * ncx
+        right = min(cx + 1, ncx - 1)
+        end = start[row + right + 1]  # the later ones of its own cell and the cell to its right
+        above_lo = 0  # the three cells above
+        above_hi = 0
+        if cy + 1 < ncy:
+            above_lo = start[row + ncx + max(cx - 1, 0)]
+            above_hi = start[row + ncx + right + 1]
+        candidates = end - i - 1 + above_hi - above_lo
+        if count + candidates > block:
+            _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+            count = 0
+        if candidates > block:
+            runs = np.concatenate((np.arange(i + 1, end), np.arange(above_lo, above_hi)))
+            count = _pick_each(
+                i, runs, count, pair_index, pair_values, pos, vel_old, body, flags, prm
+            )
+            continue
+        xi = pos[0, i]
+        yi = pos[1, i]
+        ri = body[B_R, i]
+        for j in range(i + 1, end):
+            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+        for j in range(above_lo, above_hi):
+            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
 
 
 @numba.njit(cache=True)
@@ -988,6 +1044,22 @@ def _pairs_chunks(
 
 
 @numba.njit(parallel=True, cache=True)
+def _pairs_cells_chunks(
+    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    pair_index: IntArray, pair_values: FloatArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs_cells over the even (parity 0) or odd (1) chunks in parallel, as _pairs_chunks."""
+    chunks = bounds.shape[0] - 1
+    for half in numba.prange((chunks - parity + 1) // 2):
+        c = 2 * half + parity
+        _pairs_cells(
+            bounds[c], bounds[c + 1], pos, vel_old, body, flags, cells, start, ncx, ncy,
+            pair_index[c], pair_values[c], prm,
+        )  # fmt: skip
+
+
+@numba.njit(parallel=True, cache=True)
 def _settle_chunks(
     bounds: IntArray, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
     rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
@@ -1002,18 +1074,33 @@ def _settle_chunks(
 
 
 @numba.njit(cache=True)
+def _lists_from_ref(
+    ref: FloatArray, nbr: ListArray, ncount: npt.NDArray[np.int32], bounds: IntArray,
+    prm: FloatArray,
+) -> ListArray:  # fmt: skip
+    """The lists of the last build, which its step skipped (_pairs_cells): the same grid and
+    lists, from the positions it was made at (ref; the particles are still in its order)."""
+    ncx, ncy, cells, start, _ = _grid(ref, prm[P_LIST_RADIUS])
+    return _fill(ref, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
+
+
+@numba.njit(cache=True)
 def advance(
     steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
     vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
-    ncount: npt.NDArray[np.int32], rects: FloatArray, circles: FloatArray, objects: FloatArray,
-    acc: FloatArray, bounds: IntArray, pair_index: IntArray, pair_values: FloatArray,
-    prm: FloatArray,
-) -> tuple[ListArray, int]:  # fmt: skip
+    ncount: npt.NDArray[np.int32], listed: bool, rects: FloatArray, circles: FloatArray,
+    objects: FloatArray, acc: FloatArray, bounds: IntArray, pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
+) -> tuple[ListArray, bool, int]:  # fmt: skip
     """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
     chunk everything runs inline (no parallel region to start), with several in parallel.
     pair_index and pair_values are the pair pass's scratch, one (rows, block) per chunk.
-    Returns the neighbour lists' array (possibly a new, wider one) and how many times the lists
-    were rebuilt."""
+
+    A step that rebuilds the lists takes its pairs straight from the new grid (_pairs_cells) and
+    leaves the lists unfilled (`listed` False); the next step that keeps them fills them from
+    the build's positions first. A boiling swarm, rebuilding every step, never fills a list.
+    Returns the neighbour lists' array (possibly a new, wider one), whether it holds the last
+    build's lists, and how many times the lists were rebuilt."""
     n = pos.shape[1]
     inline = bounds.shape[0] == 2
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
@@ -1027,22 +1114,41 @@ def advance(
             )
         _objects_move(objects, prm)
         if moved > limit:
-            nbr = build_lists(
-                pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
+            ncx, ncy, cells, start = _prepare(
+                pos, ref, vel, vel_old, body, flags, ext, bounds, prm, True
             )
             rebuilds += 1
-        if inline:
-            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, pair_index[0], pair_values[0], prm)
-        else:
-            for parity in (0, 1):
-                _pairs_chunks(
-                    bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
-                    pair_values, prm,
+            listed = False
+            if inline:
+                _pairs_cells(
+                    0, n, pos, vel_old, body, flags, cells, start, ncx, ncy, pair_index[0],
+                    pair_values[0], prm,
                 )  # fmt: skip
+            else:
+                for parity in (0, 1):
+                    _pairs_cells_chunks(
+                        bounds, parity, pos, vel_old, body, flags, cells, start, ncx, ncy,
+                        pair_index, pair_values, prm,
+                    )  # fmt: skip
+        else:
+            if not listed:
+                nbr = _lists_from_ref(ref, nbr, ncount, bounds, prm)
+                listed = True
+            if inline:
+                _pairs(
+                    0, n, pos, vel_old, body, flags, nbr, ncount, pair_index[0], pair_values[0],
+                    prm,
+                )  # fmt: skip
+            else:
+                for parity in (0, 1):
+                    _pairs_chunks(
+                        bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
+                        pair_values, prm,
+                    )  # fmt: skip
         if inline:
             _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
         else:
             _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)
-    return nbr, rebuilds
+    return nbr, listed, rebuilds

@@ -20,11 +20,6 @@ def _law(params: PhysicsParams) -> Law:
     )  # fmt: skip
 
 
-def _forces(count: int, inputs: np.ndarray, law: Law, out: np.ndarray) -> None:
-    k._pair_forces(count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
-                   out[0], out[1], out[2], out[3], out[4])  # fmt: skip
-
-
 def test_the_vectorised_pair_law_gives_each_pair_the_bits_it_gets_alone() -> None:
     # Overlapping, clamped, blended and far pairs, some without magnets: evaluated together
     # (vector instructions) and one at a time (scalar ones) they must agree to the last bit, so
@@ -40,11 +35,11 @@ def test_the_vectorised_pair_law_gives_each_pair_the_bits_it_gets_alone() -> Non
     ])  # fmt: skip
     law = _law(PhysicsParams())
     together = np.zeros((5, count))
-    _forces(count, inputs, law, together)
+    k._pair_forces(count, inputs, law, together)
     alone = np.zeros((5, count))
     for q in range(count):
         out = np.zeros((5, 1))
-        _forces(1, np.ascontiguousarray(inputs[:, q : q + 1]), law, out)
+        k._pair_forces(1, np.ascontiguousarray(inputs[:, q : q + 1]), law, out)
         alone[:, q] = out[:, 0]
     assert np.array_equal(together, alone)
     pressed = distance < contact

@@ -359,18 +359,19 @@ PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes
 
 @numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
 def _pair_forces(
-    count: int, dx: FloatArray, dy: FloatArray, c: FloatArray, dvx: FloatArray, dvy: FloatArray,
-    strength: FloatArray, law: tuple[float, float, float, float, float, float, float, float],
-    fx: FloatArray, fy: FloatArray, contact: FloatArray, attract: FloatArray,
-    touching: FloatArray,
+    count: int, inputs: FloatArray,
+    law: tuple[float, float, float, float, float, float, float, float], outputs: FloatArray,
 ) -> None:  # fmt: skip
     """The law of `count` pairs within reach (force on the first body from the second, rel =
-    second - first at distance > 0): contact (spring, dashpot, shear) when they overlap, else the
-    magnets; the contact and attraction magnitudes; whether they touch (overlap, or a gap below
-    the magnets' lock). Branch-free and over plain arrays (the numpy error model: no division
-    check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap, blend
-    gap, A, touch gap."""
+    second - first at distance > 0; inputs: rows dx, dy, contact distance, dvx, dvy, magnet
+    strength): contact (spring, dashpot, shear) when they overlap, else the magnets. Outputs:
+    rows fx, fy, the contact and attraction magnitudes, whether they touch (1: overlap, or a gap
+    below the magnets' lock). Branch-free and over plain rows (the numpy error model: no
+    division check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap,
+    blend gap, A, touch gap."""
     spring, damping, shear, low, clamp_gap, blend_gap, a, touch_gap = law
+    dx, dy, c, dvx, dvy, strength = inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5]
+    fx, fy, contact, attract, touching = outputs[0], outputs[1], outputs[2], outputs[3], outputs[4]
     for q in range(count):
         d = math.sqrt(dx[q] * dx[q] + dy[q] * dy[q])
         nx = dx[q] / d
@@ -409,10 +410,7 @@ def _pair_block(
         prm[P_SPRING], prm[P_DAMPING], prm[P_SHEAR], prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP],
         prm[P_BLEND_GAP], prm[P_ATTRACTION], prm[P_TOUCH_GAP],
     )  # fmt: skip
-    _pair_forces(
-        count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
-        outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
-    )  # fmt: skip
+    _pair_forces(count, inputs, law, outputs)
     for q in range(count):
         j = partner[q]
         i = index[1, q]

@@ -352,26 +352,25 @@ PAIR_BLOCK = 1024
 """Pairs gathered before they are evaluated together: the force law then runs as one loop over
 contiguous arrays, which the compiler vectorises (no branch to mispredict, several pairs per
 instruction)."""
-PAIR_INDEX_ROWS = 2  # a pair block's integers: second body, first body
+PAIR_INDEX_ROWS = 2  # a pair block's integers (2 blocks wide): second body, first body
 PAIR_INPUTS = 6  # its floats: dx, dy, contact distance, dvx, dvy, magnet strength (the inputs),
 PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes, touching (0 / 1)
 
 
 @numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
 def _pair_forces(
-    count: int, inputs: FloatArray,
-    law: tuple[float, float, float, float, float, float, float, float], outputs: FloatArray,
+    count: int, dx: FloatArray, dy: FloatArray, c: FloatArray, dvx: FloatArray, dvy: FloatArray,
+    strength: FloatArray, law: tuple[float, float, float, float, float, float, float, float],
+    fx: FloatArray, fy: FloatArray, contact: FloatArray, attract: FloatArray,
+    touching: FloatArray,
 ) -> None:  # fmt: skip
     """The law of `count` pairs within reach (force on the first body from the second, rel =
-    second - first at distance > 0; inputs: rows dx, dy, contact distance, dvx, dvy, magnet
-    strength): contact (spring, dashpot, shear) when they overlap, else the magnets. Outputs:
-    rows fx, fy, the contact and attraction magnitudes, whether they touch (1: overlap, or a gap
-    below the magnets' lock). Branch-free and over plain rows (the numpy error model: no
-    division check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap,
-    blend gap, A, touch gap."""
+    second - first at distance > 0): contact (spring, dashpot, shear) when they overlap, else the
+    magnets; the contact and attraction magnitudes; whether they touch (overlap, or a gap below
+    the magnets' lock). Branch-free and over plain arrays (the numpy error model: no division
+    check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap, blend
+    gap, A, touch gap."""
     spring, damping, shear, low, clamp_gap, blend_gap, a, touch_gap = law
-    dx, dy, c, dvx, dvy, strength = inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5]
-    fx, fy, contact, attract, touching = outputs[0], outputs[1], outputs[2], outputs[3], outputs[4]
     for q in range(count):
         d = math.sqrt(dx[q] * dx[q] + dy[q] * dy[q])
         nx = dx[q] / d
@@ -410,7 +409,10 @@ def _pair_block(
         prm[P_SPRING], prm[P_DAMPING], prm[P_SHEAR], prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP],
         prm[P_BLEND_GAP], prm[P_ATTRACTION], prm[P_TOUCH_GAP],
     )  # fmt: skip
-    _pair_forces(count, inputs, law, outputs)
+    _pair_forces(
+        count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
+        outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
+    )  # fmt: skip
     for q in range(count):
         j = partner[q]
         i = index[1, q]
@@ -448,19 +450,36 @@ def _pick(
 
 
 @numba.njit(cache=True, fastmath=_FAST)
+def _block_full(
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> int:  # fmt: skip
+    """Once a particle's pairs are in (and at least `block`, values' width, of them): evaluates
+    the first `block` pairs and moves the rest to the front. Blocks thus always end at the same
+    pairs of a chunk, whichever pass picked them, so that the passes add up the same bits (a
+    pair's bits may depend on where in a block it falls: vector or scalar instructions)."""
+    block = values.shape[1]
+    if count < block:  # (callers test first: a call per particle costs)
+        return count
+    _pair_block(block, index, values, pos, vel_old, body, flags, prm)
+    for q in range(block, count):
+        index[0, q - block] = index[0, q]
+        index[1, q - block] = index[1, q]
+    return count - block
+
+
+@numba.njit(cache=True, fastmath=_FAST)
 def _pick_each(
     i: int, candidates: IntArray, count: int, index: IntArray, values: FloatArray,
     pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> int:  # fmt: skip
     """_pick for more candidates than a block holds (never in a real swarm: a thousand
-    particles within the list radius), evaluating the block whenever it is full."""
+    particles within the list radius), evaluating a block whenever one is full."""
     for j in candidates:
         count = _pick(
             i, j, pos[0, i], pos[1, i], body[B_R, i], prm[P_CUTOFF], count, index, pos, body
         )
-        if count == index.shape[1]:
-            _pair_block(count, index, values, pos, vel_old, body, flags, prm)
-            count = 0
+        count = _block_full(count, index, values, pos, vel_old, body, flags, prm)
     return count
 
 
@@ -472,17 +491,13 @@ def _pairs(
 ) -> None:  # fmt: skip
     """Second pass: every listed pair (i in lo..hi, j > i) within reach once, from the new
     positions and old velocities; i gets f and j gets -f, both get |f| in their contact or
-    attraction sum. The pairs within reach are picked out first (_pick), a block at a time into
-    the scratch pair_index (PAIR_INDEX_ROWS, block) and pair_values (PAIR_VALUE_ROWS, block),
-    then evaluated together (_pair_block). The sums do not depend on where blocks end (the
-    vectorised law gives each pair the same bits as one at a time; a test checks)."""
+    attraction sum. The pairs within reach are picked out first (_pick) into the scratch
+    pair_index (PAIR_INDEX_ROWS, 2 block), then evaluated a block at a time (_pair_block, with
+    pair_values (PAIR_VALUE_ROWS, block))."""
     cutoff = prm[P_CUTOFF]
-    block = pair_index.shape[1]
+    block = pair_values.shape[1]
     count = 0
     for i in range(lo, hi):
-        if count + ncount[i] > block:
-            _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
-            count = 0
         if ncount[i] > block:
             count = _pick_each(
                 i, nbr[i, : ncount[i]].astype(np.int64), count, pair_index, pair_values, pos,
@@ -494,6 +509,8 @@ def _pairs(
         ri = body[B_R, i]
         for k in range(ncount[i]):
             count = _pick(i, nbr[i, k], xi, yi, ri, cutoff, count, pair_index, pos, body)
+        if count >= block:
+            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
     _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
 
 
@@ -506,10 +523,10 @@ def _pairs_cells(
     """_pairs straight from the grid a list build has just made (the particles in cell order),
     for a step that builds the lists: each particle meets the candidates _fill_lists would list,
     in the same order, so the same pairs within reach (all within the list radius) come in the
-    same order as from the lists, and the sums are bit for bit the same. The lists themselves
-    are filled later, only if a step needs them (see advance)."""
+    same order and blocks as from the lists, and the sums are bit for bit the same. The lists
+    themselves are filled later, only if a step needs them (see advance)."""
     cutoff = prm[P_CUTOFF]
-    block = pair_index.shape[1]
+    block = pair_values.shape[1]
     count = 0
     for i in range(lo, hi):
         cx = cells[i] % ncx
@@ -522,11 +539,7 @@ def _pairs_cells(
         if cy + 1 < ncy:
             above_lo = start[row + ncx + max(cx - 1, 0)]
             above_hi = start[row + ncx + right + 1]
-        candidates = end - i - 1 + above_hi - above_lo
-        if count + candidates > block:
-            _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
-            count = 0
-        if candidates > block:
+        if end - i - 1 + above_hi - above_lo > block:
             runs = np.concatenate((np.arange(i + 1, end), np.arange(above_lo, above_hi)))
             count = _pick_each(
                 i, runs, count, pair_index, pair_values, pos, vel_old, body, flags, prm
@@ -539,6 +552,8 @@ def _pairs_cells(
             count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
         for j in range(above_lo, above_hi):
             count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+        if count >= block:
+            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
     _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
 
 

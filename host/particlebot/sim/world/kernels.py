@@ -119,10 +119,18 @@ def _magnet_law(
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
-    """_magnet_law with the parameters of `prm`."""
-    return _magnet_law(
-        gap, strength, prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP], prm[P_BLEND_GAP], prm[P_ATTRACTION]
-    )
+    """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
+    factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
+    clamp_gap = prm[P_CLAMP_GAP]
+    blend_gap = prm[P_BLEND_GAP]
+    low = prm[P_CLAMP_FORCE]
+    if gap < clamp_gap:
+        return low * strength
+    a = prm[P_ATTRACTION]
+    if gap < blend_gap:
+        top = a / (blend_gap * blend_gap)
+        return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
+    return strength * a / (gap * gap)
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
@@ -142,8 +150,14 @@ def _contact_law(
 def _contact(
     nx: float, ny: float, overlap: float, spring: float, dvx: float, dvy: float, prm: FloatArray
 ) -> tuple[float, float]:
-    """_contact_law with the damping and shear of `prm`."""
-    return _contact_law(nx, ny, overlap, spring, prm[P_DAMPING], prm[P_SHEAR], dvx, dvy)
+    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
+    minus first), shear on its tangential part."""
+    vn = dvx * nx + dvy * ny
+    shear = prm[P_SHEAR]
+    damping = prm[P_DAMPING]
+    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
+    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
+    return fx, fy
 
 
 @numba.njit(cache=True, inline="always")
@@ -346,6 +360,67 @@ def _join(i: int, j: int, kind_i: int, flags: ByteArray) -> None:
         flags[F_JOINED, i] = 1
     elif kind_i == MEMBER and kind_j == FREE:
         flags[F_JOINED, j] = 1
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pair(
+    i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
+    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    prm: FloatArray,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """One listed pair (j > i, rel = pj - pi) within the cutoff: j gets -f and |f| in its sum
+    at once; returns what i gets (f and its contact and attraction magnitudes)."""
+    c = ri + body[B_R, j]
+    reach = c + prm[P_CUTOFF]
+    if d2 >= reach * reach or d2 == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    px, py, contact, attract, touching = _law(j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm)
+    body[B_FR, j] += contact
+    body[B_FA, j] += attract
+    body[B_FX, j] -= px
+    body[B_FY, j] -= py
+    if touching and kind_i != flags[F_KIND, j]:
+        _join(i, j, kind_i, flags)
+    return px, py, contact, attract
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs_each(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+) -> None:  # fmt: skip
+    """Second pass, one pair at a time, for small swarms (one inline chunk): every listed pair
+    (i in lo..hi, j > i) once, from the new positions and old velocities; i gets f and j gets
+    -f, both get |f| in their contact or attraction sum. Bit for bit what small swarms have
+    always run (tests pin their trajectories); large swarms take _pairs_cells and _pairs."""
+    for i in range(lo, hi):
+        xi = pos[0, i]
+        yi = pos[1, i]
+        vxi = vel_old[0, i]
+        vyi = vel_old[1, i]
+        ri = body[B_R, i]
+        magi = body[B_MAG, i]
+        kind_i = flags[F_KIND, i]
+        fx = 0.0
+        fy = 0.0
+        f_contact = 0.0
+        f_attract = 0.0
+        for k in range(ncount[i]):
+            j = nbr[i, k]
+            dx = pos[0, j] - xi
+            dy = pos[1, j] - yi
+            px, py, contact, attract = _pair(
+                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
+                flags, prm,
+            )  # fmt: skip
+            fx += px
+            fy += py
+            f_contact += contact
+            f_attract += attract
+        body[B_FX, i] += fx
+        body[B_FY, i] += fy
+        body[B_FR, i] += f_contact
+        body[B_FA, i] += f_attract
 
 
 PAIR_BLOCK = 1024
@@ -1109,9 +1184,10 @@ def advance(
     chunk everything runs inline (no parallel region to start), with several in parallel.
     pair_index and pair_values are the pair pass's scratch, one (rows, block) per chunk.
 
-    A step that rebuilds the lists takes its pairs straight from the new grid (_pairs_cells) and
-    leaves the lists unfilled (`listed` False); the next step that keeps them fills them from
-    the build's positions first. A boiling swarm, rebuilding every step, never fills a list.
+    With several chunks, a step that rebuilds the lists takes its pairs straight from the new
+    grid (_pairs_cells) and leaves the lists unfilled (`listed` False); the next step that keeps
+    them fills them from the build's positions first. A boiling swarm, rebuilding every step,
+    never fills a list. One chunk (a small swarm) runs its pairs one at a time (_pairs_each).
     Returns the neighbour lists' array (possibly a new, wider one), whether it holds the last
     build's lists, and how many times the lists were rebuilt."""
     n = pos.shape[1]
@@ -1126,38 +1202,33 @@ def advance(
                 bounds, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm
             )
         _objects_move(objects, prm)
-        if moved > limit:
+        if inline:  # a small swarm: lists built whenever needed, pairs one at a time
+            if moved > limit:
+                nbr = build_lists(
+                    pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
+                )
+                rebuilds += 1
+            _pairs_each(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+        elif moved > limit:
             ncx, ncy, cells, start = _prepare(
                 pos, ref, vel, vel_old, body, flags, ext, bounds, prm, True
             )
             rebuilds += 1
             listed = False
-            if inline:
-                _pairs_cells(
-                    0, n, pos, vel_old, body, flags, cells, start, ncx, ncy, pair_index[0],
-                    pair_values[0], prm,
+            for parity in (0, 1):
+                _pairs_cells_chunks(
+                    bounds, parity, pos, vel_old, body, flags, cells, start, ncx, ncy,
+                    pair_index, pair_values, prm,
                 )  # fmt: skip
-            else:
-                for parity in (0, 1):
-                    _pairs_cells_chunks(
-                        bounds, parity, pos, vel_old, body, flags, cells, start, ncx, ncy,
-                        pair_index, pair_values, prm,
-                    )  # fmt: skip
         else:
             if not listed:
                 nbr = _lists_from_ref(ref, nbr, ncount, bounds, prm)
                 listed = True
-            if inline:
-                _pairs(
-                    0, n, pos, vel_old, body, flags, nbr, ncount, pair_index[0], pair_values[0],
-                    prm,
+            for parity in (0, 1):
+                _pairs_chunks(
+                    bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
+                    pair_values, prm,
                 )  # fmt: skip
-            else:
-                for parity in (0, 1):
-                    _pairs_chunks(
-                        bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
-                        pair_values, prm,
-                    )  # fmt: skip
         if inline:
             _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
         else:

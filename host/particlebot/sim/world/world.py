@@ -200,7 +200,7 @@ class World:
         chunks = 1 if n < PARALLEL_FROM else CHUNKS
         self._bounds = np.linspace(0, n, chunks + 1).astype(np.int64)
         self._acc = np.zeros((chunks, len(self.objects), k.ACC_COLS))
-        self._pair_index = np.zeros((chunks, k.PAIR_INDEX_ROWS, k.PAIR_BLOCK), dtype=np.int64)
+        self._pair_index = np.zeros((chunks, k.PAIR_INDEX_ROWS, 2 * k.PAIR_BLOCK), dtype=np.int64)
         self._pair_values = np.zeros((chunks, k.PAIR_VALUE_ROWS, k.PAIR_BLOCK))
         self._rects = self.arena.rect_array()
         self._circles = self.arena.circle_array()

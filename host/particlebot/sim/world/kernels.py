@@ -104,6 +104,20 @@ _FAST = {"contract", "arcp", "nsz", "reassoc"}
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _magnet_law(
+    gap: float, strength: float, low: float, clamp_gap: float, blend_gap: float, a: float
+) -> float:
+    """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
+    factors): the clamp `low` below the clamp gap, a linear blend up to the blend gap, A / gap^2.
+    Branch-free (each piece computed, one chosen), so that a loop of pairs vectorises."""
+    top = a / (blend_gap * blend_gap)
+    blend = low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low)
+    far_gap = max(gap, blend_gap)
+    far = a / (far_gap * far_gap)
+    return strength * (low if gap < clamp_gap else (blend if gap < blend_gap else far))
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
     """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
     factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
@@ -117,6 +131,19 @@ def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
         top = a / (blend_gap * blend_gap)
         return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
     return strength * a / (gap * gap)
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _contact_law(
+    nx: float, ny: float, overlap: float, spring: float, damping: float, shear: float,
+    dvx: float, dvy: float,
+) -> tuple[float, float]:  # fmt: skip
+    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
+    minus first), shear on its tangential part."""
+    vn = dvx * nx + dvy * ny
+    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
+    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
+    return fx, fy
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
@@ -358,12 +385,14 @@ def _pair(
 
 
 @numba.njit(cache=True, fastmath=_FAST)
-def _pairs(
+def _pairs_each(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
 ) -> None:  # fmt: skip
-    """Second pass: every listed pair (i in lo..hi, j > i) once, from the new positions and old
-    velocities; i gets f and j gets -f, both get |f| in their contact or attraction sum."""
+    """Second pass, one pair at a time, for small swarms (one inline chunk): every listed pair
+    (i in lo..hi, j > i) once, from the new positions and old velocities; i gets f and j gets
+    -f, both get |f| in their contact or attraction sum. Bit for bit what small swarms have
+    always run (tests pin their trajectories); large swarms take _pairs_cells and _pairs."""
     for i in range(lo, hi):
         xi = pos[0, i]
         yi = pos[1, i]
@@ -392,6 +421,215 @@ def _pairs(
         body[B_FY, i] += fy
         body[B_FR, i] += f_contact
         body[B_FA, i] += f_attract
+
+
+PAIR_BLOCK = 1024
+"""Pairs gathered before they are evaluated together: the force law then runs as one loop over
+contiguous arrays, which the compiler vectorises (no branch to mispredict, several pairs per
+instruction)."""
+PAIR_INDEX_ROWS = 2  # a pair block's integers (2 blocks wide): second body, first body
+PAIR_INPUTS = 6  # its floats: dx, dy, contact distance, dvx, dvy, magnet strength (the inputs),
+PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes, touching (0 / 1)
+
+
+@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
+def _pair_forces(
+    count: int, dx: FloatArray, dy: FloatArray, c: FloatArray, dvx: FloatArray, dvy: FloatArray,
+    strength: FloatArray, law: tuple[float, float, float, float, float, float, float, float],
+    fx: FloatArray, fy: FloatArray, contact: FloatArray, attract: FloatArray,
+    touching: FloatArray,
+) -> None:  # fmt: skip
+    """The law of `count` pairs within reach (force on the first body from the second, rel =
+    second - first at distance > 0): contact (spring, dashpot, shear) when they overlap, else the
+    magnets; the contact and attraction magnitudes; whether they touch (overlap, or a gap below
+    the magnets' lock). Branch-free and over plain arrays (the numpy error model: no division
+    check), so that it vectorises. law: spring, damping, shear, clamp force, clamp gap, blend
+    gap, A, touch gap."""
+    spring, damping, shear, low, clamp_gap, blend_gap, a, touch_gap = law
+    for q in range(count):
+        d = math.sqrt(dx[q] * dx[q] + dy[q] * dy[q])
+        nx = dx[q] / d
+        ny = dy[q] / d
+        overlap = c[q] - d
+        px, py = _contact_law(nx, ny, overlap, spring, damping, shear, dvx[q], dvy[q])
+        pull = _magnet_law(-overlap, strength[q], low, clamp_gap, blend_gap, a)
+        pressed = overlap > 0.0
+        fx[q] = px if pressed else pull * nx
+        fy[q] = py if pressed else pull * ny
+        contact[q] = math.sqrt(px * px + py * py) if pressed else 0.0
+        attract[q] = 0.0 if pressed else pull
+        touching[q] = 1.0 if -overlap < touch_gap else 0.0
+
+
+@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
+def _pair_block(
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """Evaluates the `count` gathered pairs (i = index[1, q], j = index[0, q]) and adds them up
+    in their order: i gets f and j gets -f, both |f| in their contact or attraction sum."""
+    partner = index[0]
+    inputs = values[:PAIR_INPUTS]
+    outputs = values[PAIR_INPUTS:]
+    for q in range(count):
+        j = partner[q]
+        i = index[1, q]
+        inputs[0, q] = pos[0, j] - pos[0, i]
+        inputs[1, q] = pos[1, j] - pos[1, i]
+        inputs[2, q] = body[B_R, i] + body[B_R, j]
+        inputs[3, q] = vel_old[0, j] - vel_old[0, i]
+        inputs[4, q] = vel_old[1, j] - vel_old[1, i]
+        inputs[5, q] = body[B_MAG, i] * body[B_MAG, j]
+    law = (
+        prm[P_SPRING], prm[P_DAMPING], prm[P_SHEAR], prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP],
+        prm[P_BLEND_GAP], prm[P_ATTRACTION], prm[P_TOUCH_GAP],
+    )  # fmt: skip
+    _pair_forces(
+        count, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], inputs[5], law,
+        outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
+    )  # fmt: skip
+    for q in range(count):
+        j = partner[q]
+        i = index[1, q]
+        px = outputs[0, q]
+        py = outputs[1, q]
+        contact = outputs[2, q]
+        attract = outputs[3, q]
+        body[B_FX, i] += px
+        body[B_FY, i] += py
+        body[B_FR, i] += contact
+        body[B_FA, i] += attract
+        body[B_FX, j] -= px
+        body[B_FY, j] -= py
+        body[B_FR, j] += contact
+        body[B_FA, j] += attract
+        kind_i = flags[F_KIND, i]
+        if outputs[4, q] != 0.0 and kind_i != flags[F_KIND, j]:
+            _join(i, j, kind_i, flags)
+
+
+@numba.njit(cache=True, inline="always", fastmath=_FAST)
+def _pick(
+    i: int, j: int, xi: float, yi: float, ri: float, cutoff: float, count: int, index: IntArray,
+    pos: FloatArray, body: FloatArray,
+) -> int:  # fmt: skip
+    """Puts the pair (i, j) at the end of the block and keeps it if it is within reach
+    (branch-free: the test is a coin toss a branch predictor loses). Returns the new count."""
+    dx = pos[0, j] - xi
+    dy = pos[1, j] - yi
+    d2 = dx * dx + dy * dy
+    reach = ri + body[B_R, j] + cutoff
+    index[0, count] = j
+    index[1, count] = i
+    return count + ((d2 < reach * reach) & (d2 != 0.0))
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _block_full(
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> int:  # fmt: skip
+    """Once a particle's pairs are in (and at least `block`, values' width, of them): evaluates
+    the first `block` pairs and moves the rest to the front. Blocks thus always end at the same
+    pairs of a chunk, whichever pass picked them, so that the passes add up the same bits (a
+    pair's bits may depend on where in a block it falls: vector or scalar instructions)."""
+    block = values.shape[1]
+    if count < block:  # (callers test first: a call per particle costs)
+        return count
+    _pair_block(block, index, values, pos, vel_old, body, flags, prm)
+    for q in range(block, count):
+        index[0, q - block] = index[0, q]
+        index[1, q - block] = index[1, q]
+    return count - block
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pick_each(
+    i: int, candidates: IntArray, count: int, index: IntArray, values: FloatArray,
+    pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+) -> int:  # fmt: skip
+    """_pick for more candidates than a block holds (never in a real swarm: a thousand
+    particles within the list radius), evaluating a block whenever one is full."""
+    for j in candidates:
+        count = _pick(
+            i, j, pos[0, i], pos[1, i], body[B_R, i], prm[P_CUTOFF], count, index, pos, body
+        )
+        count = _block_full(count, index, values, pos, vel_old, body, flags, prm)
+    return count
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray, pair_values: FloatArray,
+    prm: FloatArray,
+) -> None:  # fmt: skip
+    """Second pass: every listed pair (i in lo..hi, j > i) within reach once, from the new
+    positions and old velocities; i gets f and j gets -f, both get |f| in their contact or
+    attraction sum. The pairs within reach are picked out first (_pick) into the scratch
+    pair_index (PAIR_INDEX_ROWS, 2 block), then evaluated a block at a time (_pair_block, with
+    pair_values (PAIR_VALUE_ROWS, block))."""
+    cutoff = prm[P_CUTOFF]
+    block = pair_values.shape[1]
+    count = 0
+    for i in range(lo, hi):
+        if ncount[i] > block:
+            count = _pick_each(
+                i, nbr[i, : ncount[i]].astype(np.int64), count, pair_index, pair_values, pos,
+                vel_old, body, flags, prm,
+            )  # fmt: skip
+            continue
+        xi = pos[0, i]
+        yi = pos[1, i]
+        ri = body[B_R, i]
+        for k in range(ncount[i]):
+            count = _pick(i, nbr[i, k], xi, yi, ri, cutoff, count, pair_index, pos, body)
+        if count >= block:
+            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _pairs_cells(
+    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    cells: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs straight from the grid a list build has just made (the particles in cell order),
+    for a step that builds the lists: each particle meets the candidates _fill_lists would list,
+    in the same order, so the same pairs within reach (all within the list radius) come in the
+    same order and blocks as from the lists, and the sums are bit for bit the same. The lists
+    themselves are filled later, only if a step needs them (see advance)."""
+    cutoff = prm[P_CUTOFF]
+    block = pair_values.shape[1]
+    count = 0
+    for i in range(lo, hi):
+        cx = cells[i] % ncx
+        cy = cells[i] // ncx
+        row = cy * ncx
+        right = min(cx + 1, ncx - 1)
+        end = start[row + right + 1]  # the later ones of its own cell and the cell to its right
+        above_lo = 0  # the three cells above
+        above_hi = 0
+        if cy + 1 < ncy:
+            above_lo = start[row + ncx + max(cx - 1, 0)]
+            above_hi = start[row + ncx + right + 1]
+        if end - i - 1 + above_hi - above_lo > block:
+            runs = np.concatenate((np.arange(i + 1, end), np.arange(above_lo, above_hi)))
+            count = _pick_each(
+                i, runs, count, pair_index, pair_values, pos, vel_old, body, flags, prm
+            )
+            continue
+        xi = pos[0, i]
+        yi = pos[1, i]
+        ri = body[B_R, i]
+        for j in range(i + 1, end):
+            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+        for j in range(above_lo, above_hi):
+            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+        if count >= block:
+            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
 
 
 @numba.njit(cache=True)
@@ -745,13 +983,39 @@ def _fill_chunks(
     return most
 
 
+BODY_KEPT = B_FX
+"""Rows of `body` that carry over from step to step (r, the force sums the servo reads, the
+magnet factor); force x and y are a step's own, cleared before use, so a re-ordering skips them."""
+
+
 @numba.njit(cache=True)
-def _permute(rows: npt.NDArray, order: IntArray) -> None:
-    """rows[:, p] = rows[:, order[p]] for every p, through a scratch copy."""
-    scratch = rows.copy()
-    for r in range(rows.shape[0]):
-        for p in range(rows.shape[1]):
-            rows[r, p] = scratch[r, order[p]]
+def _reorder(
+    order: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray,
+    body: FloatArray, flags: ByteArray, ext: IntArray,
+) -> None:  # fmt: skip
+    """Every per-particle row (but a step's own force rows) and `ext` re-ordered: slot p takes
+    what slot order[p] held. Positions and velocities go through ref and vel_old, which a list
+    build then wants equal to them anyway; the rest through copies."""
+    n = pos.shape[1]
+    for axis in range(2):
+        for p in range(n):
+            ref[axis, p] = pos[axis, order[p]]
+        for p in range(n):
+            vel_old[axis, p] = vel[axis, order[p]]
+    pos[:, :] = ref
+    vel[:, :] = vel_old
+    kept = body[:BODY_KEPT]
+    had = kept.copy()
+    for r in range(BODY_KEPT):
+        for p in range(n):
+            kept[r, p] = had[r, order[p]]
+    was = flags.copy()
+    for r in range(FLAG_ROWS):
+        for p in range(n):
+            flags[r, p] = was[r, order[p]]
+    index = ext.copy()
+    for p in range(n):
+        ext[p] = index[order[p]]
 
 
 @numba.njit(cache=True)
@@ -786,16 +1050,14 @@ def _prepare(
     n = pos.shape[1]
     ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
     if sort:
-        _permute(pos, members)
-        _permute(vel, members)
-        _permute(body, members)
-        _permute(flags, members)
-        _permute(ext.reshape(1, n), members)
-        _permute(cells.reshape(1, n), members)  # the same grid, now in cell order
-        vel_old[:, :] = vel
-    for i in range(n):
-        ref[0, i] = pos[0, i]
-        ref[1, i] = pos[1, i]
+        _reorder(members, pos, ref, vel, vel_old, body, flags, ext)
+        for c in range(ncx * ncy):  # the same grid, now in cell order
+            for p in range(start[c], start[c + 1]):
+                cells[p] = c
+    else:
+        for i in range(n):
+            ref[0, i] = pos[0, i]
+            ref[1, i] = pos[1, i]
     _row_bounds(start, ncx, ncy, bounds)
     return ncx, ncy, cells, start
 
@@ -855,14 +1117,34 @@ def _kinematics_chunks(
 @numba.njit(parallel=True, cache=True)
 def _pairs_chunks(
     bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
-    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
+    flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
     """_pairs over the even (parity 0) or odd (1) chunks in parallel: they write only their own
     chunk and the next, which no other chunk of the same parity touches."""
     chunks = bounds.shape[0] - 1
     for half in numba.prange((chunks - parity + 1) // 2):
         c = 2 * half + parity
-        _pairs(bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, prm)
+        _pairs(
+            bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, pair_index[c],
+            pair_values[c], prm,
+        )  # fmt: skip
+
+
+@numba.njit(parallel=True, cache=True)
+def _pairs_cells_chunks(
+    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    flags: ByteArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    pair_index: IntArray, pair_values: FloatArray, prm: FloatArray,
+) -> None:  # fmt: skip
+    """_pairs_cells over the even (parity 0) or odd (1) chunks in parallel, as _pairs_chunks."""
+    chunks = bounds.shape[0] - 1
+    for half in numba.prange((chunks - parity + 1) // 2):
+        c = 2 * half + parity
+        _pairs_cells(
+            bounds[c], bounds[c + 1], pos, vel_old, body, flags, cells, start, ncx, ncy,
+            pair_index[c], pair_values[c], prm,
+        )  # fmt: skip
 
 
 @numba.njit(parallel=True, cache=True)
@@ -880,16 +1162,34 @@ def _settle_chunks(
 
 
 @numba.njit(cache=True)
+def _lists_from_ref(
+    ref: FloatArray, nbr: ListArray, ncount: npt.NDArray[np.int32], bounds: IntArray,
+    prm: FloatArray,
+) -> ListArray:  # fmt: skip
+    """The lists of the last build, which its step skipped (_pairs_cells): the same grid and
+    lists, from the positions it was made at (ref; the particles are still in its order)."""
+    ncx, ncy, cells, start, _ = _grid(ref, prm[P_LIST_RADIUS])
+    return _fill(ref, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
+
+
+@numba.njit(cache=True)
 def advance(
     steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
     vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
-    ncount: npt.NDArray[np.int32], rects: FloatArray, circles: FloatArray, objects: FloatArray,
-    acc: FloatArray, bounds: IntArray, prm: FloatArray,
-) -> tuple[ListArray, int]:  # fmt: skip
+    ncount: npt.NDArray[np.int32], listed: bool, rects: FloatArray, circles: FloatArray,
+    objects: FloatArray, acc: FloatArray, bounds: IntArray, pair_index: IntArray,
+    pair_values: FloatArray, prm: FloatArray,
+) -> tuple[ListArray, bool, int]:  # fmt: skip
     """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
     chunk everything runs inline (no parallel region to start), with several in parallel.
-    Returns the neighbour lists' array (possibly a new, wider one) and how many times the lists
-    were rebuilt."""
+    pair_index and pair_values are the pair pass's scratch, one (rows, block) per chunk.
+
+    With several chunks, a step that rebuilds the lists takes its pairs straight from the new
+    grid (_pairs_cells) and leaves the lists unfilled (`listed` False); the next step that keeps
+    them fills them from the build's positions first. A boiling swarm, rebuilding every step,
+    never fills a list. One chunk (a small swarm) runs its pairs one at a time (_pairs_each).
+    Returns the neighbour lists' array (possibly a new, wider one), whether it holds the last
+    build's lists, and how many times the lists were rebuilt."""
     n = pos.shape[1]
     inline = bounds.shape[0] == 2
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
@@ -902,20 +1202,37 @@ def advance(
                 bounds, s, targets, ext, pos, ref, vel, vel_old, body, flags, prm
             )
         _objects_move(objects, prm)
-        if moved > limit:
-            nbr = build_lists(
-                pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
+        if inline:  # a small swarm: lists built whenever needed, pairs one at a time
+            if moved > limit:
+                nbr = build_lists(
+                    pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True
+                )
+                rebuilds += 1
+            _pairs_each(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+        elif moved > limit:
+            ncx, ncy, cells, start = _prepare(
+                pos, ref, vel, vel_old, body, flags, ext, bounds, prm, True
             )
             rebuilds += 1
-        if inline:
-            _pairs(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+            listed = False
+            for parity in (0, 1):
+                _pairs_cells_chunks(
+                    bounds, parity, pos, vel_old, body, flags, cells, start, ncx, ncy,
+                    pair_index, pair_values, prm,
+                )  # fmt: skip
         else:
-            _pairs_chunks(bounds, 0, pos, vel_old, body, flags, nbr, ncount, prm)
-            _pairs_chunks(bounds, 1, pos, vel_old, body, flags, nbr, ncount, prm)
+            if not listed:
+                nbr = _lists_from_ref(ref, nbr, ncount, bounds, prm)
+                listed = True
+            for parity in (0, 1):
+                _pairs_chunks(
+                    bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
+                    pair_values, prm,
+                )  # fmt: skip
         if inline:
             _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
         else:
             _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)
-    return nbr, rebuilds
+    return nbr, listed, rebuilds

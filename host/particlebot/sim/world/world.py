@@ -200,6 +200,8 @@ class World:
         chunks = 1 if n < PARALLEL_FROM else CHUNKS
         self._bounds = np.linspace(0, n, chunks + 1).astype(np.int64)
         self._acc = np.zeros((chunks, len(self.objects), k.ACC_COLS))
+        self._pair_index = np.zeros((chunks, k.PAIR_INDEX_ROWS, 2 * k.PAIR_BLOCK), dtype=np.int64)
+        self._pair_values = np.zeros((chunks, k.PAIR_VALUE_ROWS, k.PAIR_BLOCK))
         self._rects = self.arena.rect_array()
         self._circles = self.arena.circle_array()
         self._light = LightField(self.lamp)
@@ -233,6 +235,7 @@ class World:
         width = int(math.pi * (p.list_radius + p.r_min) ** 2 / (2 * math.sqrt(3) * p.r_min**2))
         self._nbr = np.zeros((n, max(width, 8)), dtype=np.int32)
         self._ncount = np.zeros(n, dtype=np.int32)
+        self._listed = True  # whether _nbr holds the last build's lists (see kernels.advance)
         rows = max(1, min(TARGET_BUDGET // n, 8192))
         self._targets = np.full((rows, n), np.nan)
         self._observers: list[_Observation] = []
@@ -350,10 +353,11 @@ class World:
                     -self.params.half_width, 2 * self.params.r_max, self._prm,
                 )  # fmt: skip
             else:
-                self._nbr, rebuilds = k.advance(
+                self._nbr, self._listed, rebuilds = k.advance(
                     rows, self._targets, self._ext, self._pos, self._ref, self._vel,
-                    self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._rects,
-                    self._circles, self._objects, self._acc, self._bounds, self._prm,
+                    self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._listed,
+                    self._rects, self._circles, self._objects, self._acc, self._bounds,
+                    self._pair_index, self._pair_values, self._prm,
                 )  # fmt: skip
             self.rebuilds += rebuilds
             self._steps += rows
@@ -394,6 +398,7 @@ class World:
             self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
             self._nbr, self._ncount, self._bounds, self._prm, True,
         )  # fmt: skip
+        self._listed = True
         if self._stale:
             # The rebuild re-ordered the particles the listing refers to: list them again.
             k.stale_list(

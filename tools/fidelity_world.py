@@ -365,7 +365,7 @@ def plot_sensitivity(results: dict[str, dict[int, list[float]]], path: Path) -> 
     ax.set_ylabel(f"speed toward the light, {large} particles (mm/s)")
     ax.set_title(
         "Blue: one published number changed (named when it moved a speed by more\n"
-        "than 0.12 mm/s; all on the right); red: pairs A-E; bars: standard error"
+        "than 0.12 mm/s; all on the right); red: pairs, lettered; bars: standard error"
     )
     ax.legend(loc="upper left", fontsize=8)
 
@@ -422,6 +422,8 @@ def main() -> int:
     if args.replot:
         if not args.sensitivity:
             parser.error("--replot redraws the --sensitivity figure; give both")
+        if not (args.out / "sensitivity.json").is_file():
+            parser.error(f"--replot: no sensitivity.json in {args.out}")
         stored = json.loads((args.out / "sensitivity.json").read_text())["speeds_mm_s"]
         runs = {name: {int(n): v for n, v in per.items()} for name, per in stored.items()}
         plot_sensitivity(runs, args.out / "sensitivity.png")

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.sim.particles.model.published import PublishedController
+from particlebot.sim.world import World
 from particlebot.sim.world.params import PhysicsParams
 
 FloatArray = npt.NDArray[np.float64]
@@ -84,3 +88,30 @@ class ReferenceSwarm:
         with np.errstate(invalid="ignore", divide="ignore"):
             scaled = v * (1 - decel / speed_now)[:, None]
         self.vel = np.where((speed_now < decel)[:, None], 0.0, scaled)
+
+
+def lockstep(
+    world: World, controller: PublishedController, steps: int
+) -> tuple[float, ReferenceSwarm]:
+    """Steps `world` (run by `controller`) and a ReferenceSwarm from the same start side by side,
+    the reference given the published profile's radii for the controller's phases; returns the
+    largest position difference seen (m) and the reference as it ends."""
+    params = world.params
+    x, y = world.positions()
+    reference = ReferenceSwarm(x, y, params)
+    settings = controller.settings
+    worst = 0.0
+    for step in range(steps):
+        world.step(1)
+        tau = np.mod(step * params.dt + controller.phases, settings.cycle_s)
+        rising = params.r_min + (params.r_max - params.r_min) * tau / settings.rise_s
+        falling = params.r_min + (params.r_max - params.r_min) * (2 - tau / settings.rise_s)
+        target = np.where(
+            tau < settings.rise_s, rising, np.where(tau < 2 * settings.rise_s, falling, math.nan)
+        )
+        reference.step(target)
+        xs, ys = world.positions()
+        worst = max(
+            worst, np.abs(xs - reference.pos[:, 0]).max(), np.abs(ys - reference.pos[:, 1]).max()
+        )
+    return worst, reference

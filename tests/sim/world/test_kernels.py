@@ -3,17 +3,15 @@ from the lists, a small swarm run on it against the numpy transcription."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from particlebot.sim.particles.model.published import PublishedController
-from particlebot.sim.world import Lamp, PhysicsParams, World
+from particlebot.sim.world import Lamp, World
 from particlebot.sim.world import kernels as k
 from particlebot.sim.world import world as world_module
 from tests.sim.world.conftest import R_MIN, cluster
-from tests.sim.world.reference import ReferenceSwarm
+from tests.sim.world.reference import lockstep
 
 
 def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
@@ -64,27 +62,11 @@ def test_the_parallel_path_follows_the_plain_numpy_transcription_too(
     # and the vectorised law are what large swarms run: made to run a small swarm here, they
     # must follow the numpy transcription of the published step as closely.
     monkeypatch.setattr(world_module, "PARALLEL_FROM", 1)
-    params = PhysicsParams()
     x, y = cluster(12, seed=9)
     controller = PublishedController()
     world = World(x, y, controller=controller, lamp=Lamp(-4.0, 0.5), seed=9)
     assert world._bounds.shape[0] > 2
-    reference = ReferenceSwarm(x, y, params)
-    settings = controller.settings
-    worst = 0.0
-    for step in range(600):
-        world.step(1)
-        tau = np.mod(step * params.dt + controller.phases, settings.cycle_s)
-        rising = params.r_min + (params.r_max - params.r_min) * tau / settings.rise_s
-        falling = params.r_min + (params.r_max - params.r_min) * (2 - tau / settings.rise_s)
-        target = np.where(
-            tau < settings.rise_s, rising, np.where(tau < 2 * settings.rise_s, falling, math.nan)
-        )
-        reference.step(target)
-        xs, ys = world.positions()
-        worst = max(
-            worst, np.abs(xs - reference.pos[:, 0]).max(), np.abs(ys - reference.pos[:, 1]).max()
-        )
+    worst, reference = lockstep(world, controller, steps=600)
     assert np.abs(world.radii() - reference.r).max() < 1e-9
     assert worst < 1e-9
     assert world.rebuilds > 1 and np.abs(world.state().vx).max() > 0  # and something happened

@@ -28,7 +28,7 @@ from particlebot.sim.world import (
 from particlebot.sim.world import world as world_module
 from particlebot.sim.world.world import Precision
 from tests.sim.world.conftest import R_MIN, Command, cluster, physics
-from tests.sim.world.reference import ReferenceSwarm
+from tests.sim.world.reference import lockstep
 
 
 def _cycling(count: int, seed: int, **kwargs: object) -> World:
@@ -176,26 +176,10 @@ def test_results_do_not_depend_on_the_number_of_threads() -> None:
 
 
 def test_kernels_follow_a_plain_numpy_transcription_of_the_published_step() -> None:
-    params = PhysicsParams()
     x, y = cluster(10, seed=8)
     controller = PublishedController()
     world = World(x, y, controller=controller, lamp=Lamp(-4.0, 0.5), seed=8)
-    reference = ReferenceSwarm(x, y, params)
-    settings = controller.settings
-    worst = 0.0
-    for step in range(600):
-        world.step(1)
-        tau = np.mod(step * params.dt + controller.phases, settings.cycle_s)
-        rising = params.r_min + (params.r_max - params.r_min) * tau / settings.rise_s
-        falling = params.r_min + (params.r_max - params.r_min) * (2 - tau / settings.rise_s)
-        target = np.where(
-            tau < settings.rise_s, rising, np.where(tau < 2 * settings.rise_s, falling, math.nan)
-        )
-        reference.step(target)
-        xs, ys = world.positions()
-        worst = max(
-            worst, np.abs(xs - reference.pos[:, 0]).max(), np.abs(ys - reference.pos[:, 1]).max()
-        )
+    worst, reference = lockstep(world, controller, steps=600)
     assert np.abs(world.radii() - reference.r).max() < 1e-9
     assert worst < 1e-9
     assert np.abs(world.state().vx).max() > 0  # and something happened

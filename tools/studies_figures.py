@@ -97,7 +97,7 @@ def save(fig: plt.Figure, path: Path) -> Path:
 
 
 def dead_figures(results: Path, out: Path) -> list[Path]:
-    ours = gather(results, ("dead-small", "dead-high", "dead-1000"), "speed_mm_s")
+    ours = gather(results, ("dead-small", "dead-high", "dead-1000", "dead-1000-high"), "speed_mm_s")
     if not ours:
         return []
     fig, (absolute, relative) = plt.subplots(1, 2, figsize=(11, 4.4), dpi=120)
@@ -141,6 +141,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
             "dead-cand-small",
             "dead-cand-1000",
             "dead-cand-1000b",
+            "dead-cand-1000c",
         ),
     }
     found = {label: gather(results, names, "speed_mm_s") for label, names in variants.items()}

@@ -111,26 +111,19 @@ def _magnet_law(
     factors): the clamp `low` below the clamp gap, a linear blend up to the blend gap, A / gap^2.
     Branch-free (each piece computed, one chosen), so that a loop of pairs vectorises."""
     top = a / (blend_gap * blend_gap)
-    blend = low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low)
+    clamp = low * strength
+    blend = strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
     far_gap = max(gap, blend_gap)
-    far = a / (far_gap * far_gap)
-    return strength * (low if gap < clamp_gap else (blend if gap < blend_gap else far))
+    far = strength * a / (far_gap * far_gap)
+    return clamp if gap < clamp_gap else (blend if gap < blend_gap else far)
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _magnet(gap: float, strength: float, prm: FloatArray) -> float:
-    """Magnet pull (N) across a gap (m), scaled by strength (the product of the two bodies'
-    factors): the clamp below the clamp gap, a linear blend up to the blend gap, A / gap^2."""
-    clamp_gap = prm[P_CLAMP_GAP]
-    blend_gap = prm[P_BLEND_GAP]
-    low = prm[P_CLAMP_FORCE]
-    if gap < clamp_gap:
-        return low * strength
-    a = prm[P_ATTRACTION]
-    if gap < blend_gap:
-        top = a / (blend_gap * blend_gap)
-        return strength * (low + (gap - clamp_gap) / (blend_gap - clamp_gap) * (top - low))
-    return strength * a / (gap * gap)
+    """_magnet_law with the run's parameters."""
+    return _magnet_law(
+        gap, strength, prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP], prm[P_BLEND_GAP], prm[P_ATTRACTION]
+    )
 
 
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
@@ -150,14 +143,8 @@ def _contact_law(
 def _contact(
     nx: float, ny: float, overlap: float, spring: float, dvx: float, dvy: float, prm: FloatArray
 ) -> tuple[float, float]:
-    """Force on the first body: spring along -n, dashpot on the whole relative velocity (second
-    minus first), shear on its tangential part."""
-    vn = dvx * nx + dvy * ny
-    shear = prm[P_SHEAR]
-    damping = prm[P_DAMPING]
-    fx = -spring * overlap * nx + damping * dvx + shear * (dvx - vn * nx)
-    fy = -spring * overlap * ny + damping * dvy + shear * (dvy - vn * ny)
-    return fx, fy
+    """_contact_law with the dashpot and shear of the run's parameters."""
+    return _contact_law(nx, ny, overlap, spring, prm[P_DAMPING], prm[P_SHEAR], dvx, dvy)
 
 
 @numba.njit(cache=True, inline="always")

@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -16,7 +17,14 @@ from distributed import LocalCluster
 
 from particlebot.commands.study import main
 from particlebot.studies.definitions import STUDIES, RawOptions, resolve
-from particlebot.studies.engine import ClusterError, run_study
+from particlebot.studies.engine import (
+    ClusterError,
+    StudyOutcome,
+    dask_client,
+    run_pending,
+    run_study,
+)
+from particlebot.studies.progress import Progress
 from particlebot.studies.spec import RunSpec
 from particlebot.studies.standin import StandInRunner
 from particlebot.studies.store import ResultStore
@@ -140,7 +148,7 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
 
 def test_an_existing_cluster_gets_the_same_runs_and_stays_up(tmp_path: Path) -> None:
     specs = quick_specs(seeds=1)
-    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster:
         address = cluster.scheduler_address
         store = ResultStore(tmp_path / "results")
         outcome = run_study(specs, store, StandInRunner(), scheduler=address, stream=io.StringIO())
@@ -155,3 +163,30 @@ def test_an_existing_cluster_gets_the_same_runs_and_stays_up(tmp_path: Path) -> 
                 stream=io.StringIO(),
             )
         assert cluster.status.name == "running"
+
+
+def test_a_run_still_going_reports_its_share_to_the_client(tmp_path: Path) -> None:
+    spec = quick_specs(seeds=1)[0]
+    tickets = tmp_path / "tickets"
+    tickets.mkdir()
+    # The run says it is half way, then is held until the test has seen the report.
+    runner = StandInRunner(hold_after=0, ticket_dir=tickets, reports_share=0.5)
+    store = ResultStore(tmp_path / "results")
+    store.prepare()
+    progress = Progress("dead", 1, 0, spec.cost, stream=io.StringIO())
+    outcome = StudyOutcome(total=1, reused=0)
+    with dask_client(None, workers=1) as client:
+        study = threading.Thread(
+            target=run_pending, args=(client, runner, [spec], store, progress, outcome)
+        )
+        study.start()
+        deadline = time.monotonic() + 60
+        while spec.run_id not in progress.in_flight:
+            assert study.is_alive() and time.monotonic() < deadline, outcome
+            time.sleep(0.05)
+        assert progress.in_flight[spec.run_id] == (spec.cost, 0.5, 0.5)
+        assert progress.share_done() == 0.5 and outcome.ran == 0
+        (tickets / "go").touch()
+        study.join(timeout=60)
+    assert outcome.ran == 1 and progress.in_flight == {}
+    assert progress.share_done() == 1.0

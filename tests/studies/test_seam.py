@@ -55,7 +55,10 @@ def test_the_study_frame_is_the_simulators_moved_to_the_initial_centroid() -> No
     assert (wall.x_min - cx, wall.y_max - cy) == pytest.approx((0.6, 2.0))
     assert framed.turned_deg == 0.0 and framed.positions is None
 
-    outcome = seam.simulate(WALLED)
+    shares: list[float] = []
+    outcome = seam.simulate(WALLED, progress=shares.append)
+    # The run told its progress how far it was, up to the end.
+    assert shares and shares == sorted(shares) and shares[-1] == 1.0
     track = outcome.track
     # The published CSV's first row is the initial centroid: the study frame's origin.
     assert (track.centroid_x[0], track.centroid_y[0]) == pytest.approx((0.0, 0.0), abs=2e-6)

@@ -7,13 +7,14 @@ import logging
 import os
 import signal
 import threading
+import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TextIO
+from typing import Any, TextIO
 
 import dask
-from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed, get_worker
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
@@ -29,6 +30,11 @@ cluster's scheduler (an existing cluster keeps its own setting, 3 unless changed
 EXCEPTION_RETRIES = 1
 """A run that raises is tried once more (Dask's retries=): a full disk or a file system hiccup on
 a cluster passes; a deterministic error fails twice and is recorded."""
+PROGRESS_TOPIC = "particlebot-run-progress"
+"""Dask event topic on which workers report how far their runs are."""
+PROGRESS_EVERY_S = 5.0
+"""A run reports at most this often: a 10,000-particle run takes half an hour, and a cluster of
+hundreds of workers should not flood the scheduler."""
 LOG = logging.getLogger(__name__)
 
 
@@ -106,13 +112,55 @@ def _local_cluster(workers: int) -> LocalCluster:
                 n_workers=workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                # Any free port: a fixed one (None means 8787) makes a second study on the same
+                # machine print a four-line warning that it took another.
+                dashboard_address=":0",
                 silence_logs=logging.ERROR,
                 env={"NUMBA_NUM_THREADS": "1"},
             )
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
+
+
+class ReportToClient:
+    """The progress a run gets on a worker: sends {run, start, now} (shares of its steps) as a
+    Dask event, at most every PROGRESS_EVERY_S; start is the share at the first report, so a
+    run resumed from its snapshot does not count its earlier part as work done now."""
+
+    def __init__(self, run_id: str, every_s: float = PROGRESS_EVERY_S) -> None:
+        self.run_id = run_id
+        self.every_s = every_s
+        self.start: float | None = None
+        self.last_sent = -float("inf")
+
+    def __call__(self, share: float) -> None:
+        if self.start is None:
+            self.start = share
+        now = time.monotonic()
+        if now - self.last_sent < self.every_s:
+            return
+        self.last_sent = now
+        message = {"run": self.run_id, "start": self.start, "now": share}
+        get_worker().log_event(PROGRESS_TOPIC, message)
+
+
+def execute_reporting(runner: Runner, spec: RunSpec) -> RunRecord:
+    """execute on a Dask worker, with the run's progress sent to the client."""
+    return execute(runner, spec, ReportToClient(spec.run_id))
+
+
+def _progress_handler(progress: Progress, by_run: dict[str, RunSpec]) -> Any:
+    def heard(event: tuple[float, Any]) -> None:
+        _timestamp, message = event
+        try:
+            spec = by_run[message["run"]]
+            start, now = float(message["start"]), float(message["now"])
+        except (KeyError, TypeError, ValueError):
+            return  # another client's runs on a shared cluster, or not ours at all
+        progress.running(spec.run_id, spec.cost, start, now)
+
+    return heard
 
 
 def is_local(client: Client) -> bool:
@@ -149,7 +197,12 @@ def run_pending(
         # The key is the run itself: two clients asking for the same run share one task.
         key = f"{runner.name}-{spec.run_id}"
         by_key[key] = spec
-        futures.append(client.submit(execute, runner, spec, key=key, retries=EXCEPTION_RETRIES))
+        futures.append(
+            client.submit(execute_reporting, runner, spec, key=key, retries=EXCEPTION_RETRIES)
+        )
+    client.subscribe_topic(
+        PROGRESS_TOPIC, _progress_handler(progress, {spec.run_id: spec for spec in todo})
+    )
     progress.start()
     try:
         for future in as_completed(futures):
@@ -162,11 +215,12 @@ def run_pending(
                 store.write_failure(spec, error)
                 outcome.failed[spec.run_id] = error
             future.release()
-            progress.advance(spec.cost, failed=record is None)
+            progress.advance(spec.cost, failed=record is None, run_id=spec.run_id)
     except KeyboardInterrupt:
         outcome.interrupted = True
         client.cancel(futures)
     finally:
+        client.unsubscribe_topic(PROGRESS_TOPIC)
         progress.close()
 
 

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Protocol
 
-from particlebot.studies.spec import RunRecord, RunSpec, SimOutcome, describe
+from particlebot.studies.spec import RunRecord, RunSpec, ShareDone, SimOutcome, describe
 
 
 class Runner(Protocol):
@@ -22,7 +22,7 @@ class Runner(Protocol):
         """Called once in every worker process before its first run (and the client's, for a
         local cluster): compile what needs compiling."""
 
-    def __call__(self, spec: RunSpec) -> SimOutcome: ...
+    def __call__(self, spec: RunSpec, progress: ShareDone | None = None) -> SimOutcome: ...
 
 
 @dataclass(frozen=True)
@@ -41,18 +41,19 @@ class SimulatorRunner:
 
         seam.warm_up()
 
-    def __call__(self, spec: RunSpec) -> SimOutcome:
+    def __call__(self, spec: RunSpec, progress: ShareDone | None = None) -> SimOutcome:
         from particlebot.studies import seam
 
         folder = None if self.run_folders is None else self.run_folders / spec.run_id
-        return seam.run_one(spec, folder)
+        return seam.run_one(spec, folder, progress)
 
 
-def execute(runner: Runner, spec: RunSpec) -> RunRecord:
+def execute(runner: Runner, spec: RunSpec, progress: ShareDone | None = None) -> RunRecord:
     """The task a worker runs: simulate, measure there (only numbers and the short centroid track
-    travel back, never particle arrays), and stamp who did it."""
+    travel back, never particle arrays), and stamp who did it. progress hears how far the run is
+    (the engine passes one that reports to the client)."""
     start = time.perf_counter()
-    outcome = runner(spec)
+    outcome = runner(spec, progress)
     metrics = spec.measure.evaluate(spec.setup, outcome)
     return RunRecord(
         run_id=spec.run_id,

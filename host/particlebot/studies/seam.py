@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import shutil
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -41,7 +42,7 @@ from particlebot.sim.world.light import ShadowMode
 from particlebot.sim.world.params import PhysicsParams
 from particlebot.studies.spec import PassiveObject as StudyObject
 from particlebot.studies.spec import Rect as StudyRect
-from particlebot.studies.spec import RunSpec, SimOutcome, Track, WorldSetup
+from particlebot.studies.spec import RunSpec, ShareDone, SimOutcome, Track, WorldSetup
 
 PLACEMENT_KINDS = {
     "blob": PlacementKind.ALGORITHM5,
@@ -201,26 +202,33 @@ def _clear(
     )
 
 
-def run_one(spec: RunSpec, run_dir: Path | None = None) -> SimOutcome:
+def run_one(
+    spec: RunSpec, run_dir: Path | None = None, progress: ShareDone | None = None
+) -> SimOutcome:
     """Simulates spec.setup and returns what the study's measure needs, in the study frame.
 
     run_dir: where the run keeps its folder (the published CSV, npz snapshots, the scenario as
     run; a path every worker can write): a retried run resumes there from its last snapshot.
-    None: a temporary folder, removed afterwards.
+    None: a temporary folder, removed afterwards. progress hears the share of the steps done, about
+    every CHUNK_WALL_S of wall time.
     """
-    return simulate(spec.setup, run_dir)
+    return simulate(spec.setup, run_dir, progress)
 
 
-def simulate(setup: WorldSetup, run_dir: Path | None = None) -> SimOutcome:
+def simulate(
+    setup: WorldSetup, run_dir: Path | None = None, progress: ShareDone | None = None
+) -> SimOutcome:
     """run_one for a bare setup. A kept run folder gets the simulator's pictures of the swarm
     and its track; a temporary one does not (they would cost more than a small run)."""
     if run_dir is None:
         with tempfile.TemporaryDirectory(prefix="particlebot-study-") as scratch:
-            return _run_in(setup, Path(scratch) / "run", pictures=False)
-    return _run_in(setup, run_dir, pictures=True)
+            return _run_in(setup, Path(scratch) / "run", pictures=False, progress=progress)
+    return _run_in(setup, run_dir, pictures=True, progress=progress)
 
 
-def _run_in(setup: WorldSetup, folder: Path, pictures: bool) -> SimOutcome:
+def _run_in(
+    setup: WorldSetup, folder: Path, pictures: bool, progress: ShareDone | None = None
+) -> SimOutcome:
     framed = frame(setup)
     resumed = (folder / SCENARIO_FILE).is_file() and latest_snapshot(folder) is not None
     if resumed:
@@ -229,7 +237,8 @@ def _run_in(setup: WorldSetup, folder: Path, pictures: bool) -> SimOutcome:
         if folder.exists():
             shutil.rmtree(folder)  # a start that died before its first snapshot
         run = start_run(framed, folder, pictures)
-    summary = run.advance()
+    report = None if progress is None else _share_of_steps(progress)
+    summary = run.advance(progress=report)
     if not summary.finished:
         raise RuntimeError(f"the run in {folder} stopped at {summary.t_s:g} s")
     dx, dy = framed.offset
@@ -260,6 +269,13 @@ def _run_in(setup: WorldSetup, folder: Path, pictures: bool) -> SimOutcome:
             "offset_y": dy,
         },
     )
+
+
+def _share_of_steps(progress: ShareDone) -> Callable[[Run, float], None]:
+    def report(run: Run, _wall_s: float) -> None:
+        progress(run.world.steps / max(1, run.total_steps))
+
+    return report
 
 
 def start_run(framed: Framed, folder: Path, pictures: bool) -> Run:

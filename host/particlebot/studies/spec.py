@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +18,8 @@ if TYPE_CHECKING:
 
 FloatArray = npt.NDArray[np.float64]
 CellValue = int | float | str
+ShareDone = Callable[[float], None]
+"""Told how far a run is, as the share of its steps done (0 to 1), as often as the run likes."""
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import numpy as np
 
 from particlebot.studies.packing import densest_packing_diameter_m
 from particlebot.studies.published import R_MIN_M
-from particlebot.studies.spec import RunSpec, SimOutcome, Track
+from particlebot.studies.spec import RunSpec, ShareDone, SimOutcome, Track
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,8 @@ class StandInRunner:
     makes warming up raise (a worker without the simulator, say). hold_after N with ticket_dir
     lets the first N runs (in the order they start, across processes) finish and holds every
     later one until the file ticket_dir/"go" exists: a test can interrupt a study that cannot
-    have finished, however slow the machine.
+    have finished, however slow the machine. reports_share: before its delay or hold, a run
+    tells its progress it is this far.
     """
 
     crash_once: frozenset[str] = field(default_factory=frozenset)
@@ -40,6 +41,7 @@ class StandInRunner:
     warm_up_fails: bool = False
     hold_after: int | None = None
     ticket_dir: Path | None = None
+    reports_share: float | None = None
 
     @property
     def name(self) -> str:
@@ -51,7 +53,7 @@ class StandInRunner:
         if self.warm_dir is not None:
             (self.warm_dir / str(os.getpid())).touch()
 
-    def __call__(self, spec: RunSpec) -> SimOutcome:
+    def __call__(self, spec: RunSpec, progress: ShareDone | None = None) -> SimOutcome:
         if spec.run_id in self.crash_once and self.marker_dir is not None:
             marker = self.marker_dir / f"{spec.run_id}.crashed"
             if not marker.exists():
@@ -59,6 +61,8 @@ class StandInRunner:
                 os._exit(70)  # a worker dying mid-run, as an out-of-memory kill would
         if spec.run_id in self.raise_for:
             raise RuntimeError(f"the stand-in fails {spec.run_id} on purpose")
+        if self.reports_share is not None and progress is not None:
+            progress(self.reports_share)
         if self.delay_s > 0:
             time.sleep(self.delay_s)
         if self.hold_after is not None and self.ticket_dir is not None:

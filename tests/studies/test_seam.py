@@ -6,6 +6,8 @@ from __future__ import annotations
 import io
 import json
 import math
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -187,3 +189,23 @@ def test_a_tiny_study_runs_end_to_end_on_the_simulator_and_two_workers(tmp_path:
     before = {p.name: p.stat().st_mtime_ns for p in (results / "runs").iterdir()}
     assert main(argv, stream=io.StringIO()) == 0
     assert {p.name: p.stat().st_mtime_ns for p in (results / "runs").iterdir()} == before
+
+
+def test_a_study_started_from_the_command_line_runs_each_run_on_one_thread(
+    tmp_path: Path,
+) -> None:
+    # A spawned Dask worker imports the command line's main module, and with it numba, before
+    # the cluster's environment applies: numba then starts a thread per core in every worker.
+    # Only a real command line shows it (pytest's main module does not import numba).
+    results = tmp_path / "results"
+    argv = ["study", "dead", "--sizes", "10", "--fractions", "0", "--seeds", "1"]
+    argv += ["--duration", "2min", "--skip", "1min", "--results", str(results), "--workers", "1"]
+    done = subprocess.run(
+        [sys.executable, "-m", "particlebot.cli", *argv],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    (record,) = [json.loads(path.read_text()) for path in (results / "runs").glob("*.json")]
+    assert record["summary"]["numba_threads"] == 1

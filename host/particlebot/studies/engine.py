@@ -79,8 +79,9 @@ class StudyWorkerSetup(WorkerPlugin):
 @contextmanager
 def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[Client]:
     """A client of the cluster at scheduler (tcp://HOST:8786), or of a new local cluster of
-    `workers` processes (default: one per core), one thread each: a run is single-threaded, so a
-    process per core keeps every core busy without oversubscribing numba's threads."""
+    `workers` processes (default: one per core), one thread each: a run is single-threaded (the
+    runner sets numba's threads), so a process per core keeps every core busy without
+    oversubscribing them."""
     if scheduler is not None:
         try:
             client = Client(scheduler, timeout="10s")
@@ -116,7 +117,6 @@ def _local_cluster(workers: int) -> LocalCluster:
                 # machine print a four-line warning that it took another.
                 dashboard_address=":0",
                 silence_logs=logging.ERROR,
-                env={"NUMBA_NUM_THREADS": "1"},
             )
     finally:
         if previous is not None:

@@ -42,10 +42,24 @@ class SimulatorRunner:
         seam.warm_up()
 
     def __call__(self, spec: RunSpec, progress: ShareDone | None = None) -> SimOutcome:
+        import numba
+
         from particlebot.studies import seam
 
         folder = None if self.run_folders is None else self.run_folders / spec.run_id
-        return seam.run_one(spec, folder, progress)
+        # One thread per run, set here in the thread that runs it (numba's count is per thread):
+        # a study runs a process per core, and a worker whose numba started with a thread per
+        # core (it reads NUMBA_NUM_THREADS once, at import, and a spawned worker imports the
+        # CLI, so numba, before Dask applies the cluster's environment) made 10,000-particle
+        # runs ten times slower, every core's threads fighting over it.
+        threads = numba.get_num_threads()
+        numba.set_num_threads(1)
+        try:
+            outcome = seam.run_one(spec, folder, progress)
+            outcome.summary["numba_threads"] = float(numba.get_num_threads())
+            return outcome
+        finally:
+            numba.set_num_threads(threads)
 
 
 def execute(runner: Runner, spec: RunSpec, progress: ShareDone | None = None) -> RunRecord:

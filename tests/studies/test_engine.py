@@ -190,3 +190,18 @@ def test_a_run_still_going_reports_its_share_to_the_client(tmp_path: Path) -> No
         study.join(timeout=60)
     assert outcome.ran == 1 and progress.in_flight == {}
     assert progress.share_done() == 1.0
+
+
+def test_a_study_whose_every_run_fails_says_why_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    specs = quick_specs(seeds=1)
+    results = tmp_path / "results"
+    runner = StandInRunner(raise_for=frozenset(spec.run_id for spec in specs))
+    argv = [*QUICK_DEAD[:-1], "1", "--results", str(results), "--workers", "2"]
+    assert main(argv, runner=runner, stream=io.StringIO()) == 1
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    # No report.md to point at: the line itself carries an error, and where the others are.
+    assert not (results / "report.md").exists()
+    assert last.startswith(f"{len(specs)} of {len(specs)} runs failed, the first with RuntimeError")
+    assert f"on purpose (each run's error: {results / 'failed'})" in last

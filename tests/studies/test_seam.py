@@ -19,6 +19,7 @@ from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.scenarios.build import place_swarm
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.params import PhysicsParams
+from particlebot.sim.world.world import PARALLEL_FROM
 from particlebot.studies import published as paper
 from particlebot.studies import seam
 from particlebot.studies.definitions import STUDIES, RawOptions, resolve
@@ -196,10 +197,11 @@ def test_a_study_started_from_the_command_line_runs_each_run_on_one_thread(
 ) -> None:
     # A spawned Dask worker imports the command line's main module, and with it numba, before
     # the cluster's environment applies: numba then starts a thread per core in every worker.
-    # Only a real command line shows it (pytest's main module does not import numba).
+    # Only a real command line shows it (pytest's main module does not import numba), and only
+    # a swarm that steps in parallel (World's PARALLEL_FROM particles and more).
     results = tmp_path / "results"
-    argv = ["study", "dead", "--sizes", "10", "--fractions", "0", "--seeds", "1"]
-    argv += ["--duration", "2min", "--skip", "1min", "--results", str(results), "--workers", "1"]
+    argv = ["study", "dead", "--sizes", str(PARALLEL_FROM), "--fractions", "0", "--seeds", "1"]
+    argv += ["--duration", "20s", "--skip", "10s", "--results", str(results), "--workers", "1"]
     done = subprocess.run(
         [sys.executable, "-m", "particlebot.cli", *argv],
         capture_output=True,
@@ -208,4 +210,17 @@ def test_a_study_started_from_the_command_line_runs_each_run_on_one_thread(
     )
     assert done.returncode == 0, done.stderr
     (record,) = [json.loads(path.read_text()) for path in (results / "runs").glob("*.json")]
-    assert record["summary"]["numba_threads"] == 1
+    assert record["summary"]["threads"] == 1
+
+
+@pytest.mark.parametrize(
+    ("duration_s", "interval_s"), [(7200.0, 60.0), (20.0, 20.0), (90.0, 45.0), (54000.0, 60.0)]
+)
+def test_the_track_ends_at_the_end_of_any_run(duration_s: float, interval_s: float) -> None:
+    setup = replace(WALLED, duration_s=duration_s, dump_interval_s=60.0)
+    assert seam.track_interval_s(setup) == interval_s
+
+
+def test_a_run_shorter_than_the_track_interval_is_still_measured() -> None:
+    outcome = seam.simulate(replace(WALLED, duration_s=20.0))
+    assert list(outcome.track.time_s) == [0.0, 20.0]

@@ -81,6 +81,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--json", action="store_true", help="end with one JSON line of the run's figures"
     )
+    parser.add_argument(
+        "--threads",
+        type=int_arg(Bounds(minimum=1)),
+        metavar="N",
+        help="threads for swarms of 2,048 particles and more (default: one per core; give 1 to "
+        "each of several runs sharing a machine)",
+    )
 
 
 def _lamp(text: str) -> tuple[float, float, float | None]:
@@ -183,11 +190,13 @@ def run(args: argparse.Namespace) -> int:
     from particlebot.sim.scenarios.scenario import ScenarioError
 
     try:
+        if args.threads is not None:
+            _use_threads(args.threads)
         if args.resume is not None:
             if args.scenario is not None or _changes(args):
                 raise ScenarioError(
                     "--resume continues a run as it was: give no scenario, and of the flags "
-                    "only --duration (a new end), --video or --json"
+                    "only --duration (a new end), --video, --threads or --json"
                 )
             folder = Path(args.resume)
             check_run_folder(folder)
@@ -221,6 +230,23 @@ def run(args: argparse.Namespace) -> int:
         return 130
     _report(summary, args.json)
     return 0 if summary.finished else 130
+
+
+def _use_threads(threads: int) -> None:
+    """Runs the kernels on `threads` threads. Several runs that each take every core slow one
+    another down far more than their share (a 10,000-particle step waits at each parallel region
+    for a thread another process holds: 20-40 steps/s against 1,250 on one thread each)."""
+    import numba
+
+    from particlebot.sim.scenarios.scenario import ScenarioError
+
+    most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set at import
+    if threads > most:
+        raise ScenarioError(
+            f"--threads {threads}: numba here runs at most {most} (one per core, or "
+            "NUMBA_NUM_THREADS)"
+        )
+    numba.set_num_threads(threads)
 
 
 def _changes(args: argparse.Namespace) -> bool:

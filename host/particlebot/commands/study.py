@@ -192,6 +192,7 @@ def _study(
             workers=args.workers,
             label=study.name,
             stream=stream,
+            verbose=args.verbose,
         )
     except ClusterError as exc:
         return fail(str(exc))
@@ -204,9 +205,11 @@ def _study(
         )
         return INTERRUPTED
     if outcome.failed:
+        # The first error in the line itself: when every run failed there is no report.md.
+        first = next(iter(outcome.failed.values()))
         print(
-            f"{len(outcome.failed)} runs failed (listed in {store.root / 'report.md'}); "
-            "run the same command again to retry them.",
+            f"{len(outcome.failed)} of {outcome.total} runs failed, the first with {first} "
+            f"(each run's error: {store.failed}); run the same command again to retry them.",
             file=sys.stderr,
         )
         return 1

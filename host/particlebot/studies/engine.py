@@ -77,7 +77,9 @@ class StudyWorkerSetup(WorkerPlugin):
 
 
 @contextmanager
-def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[Client]:
+def dask_client(
+    scheduler: str | None, workers: int | None = None, verbose: bool = False
+) -> Iterator[Client]:
     """A client of the cluster at scheduler (tcp://HOST:8786), or of a new local cluster of
     `workers` processes (default: one per core), one thread each: a run is single-threaded (the
     runner sets numba's threads), so a process per core keeps every core busy without
@@ -92,7 +94,7 @@ def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[C
         finally:
             client.close()
         return
-    cluster = _local_cluster(workers or os.cpu_count() or 1)
+    cluster = _local_cluster(workers or os.cpu_count() or 1, verbose)
     try:
         client = Client(cluster)
         try:
@@ -103,7 +105,7 @@ def dask_client(scheduler: str | None, workers: int | None = None) -> Iterator[C
         cluster.close()
 
 
-def _local_cluster(workers: int) -> LocalCluster:
+def _local_cluster(workers: int, verbose: bool = False) -> LocalCluster:
     in_main_thread = threading.current_thread() is threading.main_thread()
     # Worker processes inherit an ignored SIGINT (the plugin covers restarted ones).
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if in_main_thread else None
@@ -116,7 +118,9 @@ def _local_cluster(workers: int) -> LocalCluster:
                 # Any free port: a fixed one (None means 8787) makes a second study on the same
                 # machine print a four-line warning that it took another.
                 dashboard_address=":0",
-                silence_logs=logging.ERROR,
+                # A run that raises is reported by the study (one line, report.md, failed/);
+                # the workers' own "Compute Failed" blocks with tracebacks only with --verbose.
+                silence_logs=logging.INFO if verbose else logging.CRITICAL,
             )
     finally:
         if previous is not None:
@@ -251,6 +255,7 @@ def run_study(
     workers: int | None = None,
     label: str = "study",
     stream: TextIO | None = None,
+    verbose: bool = False,
 ) -> StudyOutcome:
     """Runs what the results folder lacks, on the cluster at scheduler or a local one."""
     store.prepare()
@@ -266,6 +271,6 @@ def run_study(
     progress = Progress(
         label, outcome.total, outcome.reused, sum(spec.cost for spec in todo), stream=stream
     )
-    with dask_client(scheduler, workers) as client:
+    with dask_client(scheduler, workers, verbose) as client:
         run_pending(client, runner, todo, store, progress, outcome)
     return outcome

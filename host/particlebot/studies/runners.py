@@ -55,9 +55,7 @@ class SimulatorRunner:
         threads = numba.get_num_threads()
         numba.set_num_threads(1)
         try:
-            outcome = seam.run_one(spec, folder, progress)
-            outcome.summary["numba_threads"] = float(numba.get_num_threads())
-            return outcome
+            return seam.run_one(spec, folder, progress)
         finally:
             numba.set_num_threads(threads)
 

@@ -119,7 +119,7 @@ def frame(setup: WorldSetup) -> Framed:
         physics=physics,
         controller=ControllerSpec(kind=controller, published=published),
         dead=DeadSpec(count=setup.dead, at_s=setup.dead_at_s, detach=setup.detach_dead),
-        output=OutputSpec(dump_interval_s=setup.dump_interval_s),
+        output=OutputSpec(dump_interval_s=track_interval_s(setup)),
     )
     placement = place_swarm(base)
     xy = placement.xy
@@ -202,6 +202,13 @@ def _clear(
     )
 
 
+def track_interval_s(setup: WorldSetup) -> float:
+    """The centroid track's interval: setup.dump_interval_s, or a little less where that does not
+    divide the duration, so that the track ends at the run's end."""
+    rows = math.ceil(setup.duration_s / setup.dump_interval_s - 1e-9)
+    return setup.duration_s / max(1, rows)
+
+
 def run_one(
     spec: RunSpec, run_dir: Path | None = None, progress: ShareDone | None = None
 ) -> SimOutcome:
@@ -263,6 +270,7 @@ def _run_in(
             "wall_s": summary.wall_s,
             "particle_steps_per_s": summary.particle_steps_per_s,
             "realtime_factor": summary.realtime_factor,
+            "threads": float(summary.threads),
             "resumed_at_s": (summary.steps - summary.steps_now) * run.world.params.dt,
             "turned_deg": framed.turned_deg,
             "offset_x": dx,

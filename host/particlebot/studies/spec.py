@@ -90,7 +90,9 @@ class WorldSetup:
     noise_diameters: float = 0.0
     """The controller's distance-estimation error, sd in minimum particle diameters (Fig. S20)."""
     dump_interval_s: float = 60.0
-    """Rows of the centroid track (the published CSV's interval)."""
+    """Rows of the centroid track (the published CSV's interval) at most this far apart: a run
+    whose duration is not a multiple of it gets rows a little closer, so that the last row is
+    the run's end (a 20 s run would otherwise leave only its start to measure)."""
     overrides: tuple[tuple[str, float], ...] = ()
     """Published numbers changed for this run, (name, value) pairs: fields of the world's
     PhysicsParams (static_factor, shear, magnet_cutoff, ...) and the published controller's

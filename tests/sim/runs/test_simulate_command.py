@@ -9,9 +9,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numba
 import pytest
 
 from particlebot.cli import main
+from particlebot.sim.world.world import PARALLEL_FROM
 
 REPO = Path(__file__).resolve().parents[3]
 SUMMARY_KEYS = {
@@ -46,6 +48,20 @@ def test_a_quick_run_from_flags_ends_with_one_json_line(
     scenario = (folder / "scenario.toml").read_text()
     assert "height = 0.3" in scenario and "seed = 2" in scenario
     assert len((folder / "run.csv").read_text().splitlines()) == 2 + 4
+
+
+def test_threads_sets_how_many_threads_a_large_swarm_steps_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    before = numba.get_num_threads()  # numba's count is per thread: pytest's own, here
+    argv = ["simulate", "--particles", str(PARALLEL_FROM), "--duration", "0.5"]
+    try:
+        assert main([*argv, "--threads", "1", "-o", str(tmp_path / "one"), "--json"]) == 0
+    finally:
+        numba.set_num_threads(before)
+    assert last_json(capsys.readouterr().out)["threads"] == 1
+    assert main([*argv, "-o", str(tmp_path / "default"), "--json"]) == 0
+    assert last_json(capsys.readouterr().out)["threads"] == before
 
 
 def test_a_published_cfg_runs_as_is(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -87,6 +103,8 @@ def test_flags_change_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixt
         (["--controller", "magic"], "invalid choice"),
         (["no-such-file.toml"], "no such scenario file"),
         (["--resume", "nowhere"], "not a run folder"),
+        (["--threads", "0"], "--threads: must be a whole number >= 1"),
+        (["--threads", "100000"], "--threads 100000: numba here runs at most"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_nothing_written(

@@ -67,6 +67,8 @@ class Summary:
     wall_s: float
     particle_steps_per_s: float
     realtime_factor: float
+    threads: int
+    """Threads the steps ran on (1 below World's PARALLEL_FROM particles)."""
     centroid_start: tuple[float, float]
     centroid_end: tuple[float, float]
     distance_to_light_start: float
@@ -345,6 +347,7 @@ class Run:
             wall_s=wall_s,
             particle_steps_per_s=world.count * steps_now / wall_s if wall_s > 0 else 0.0,
             realtime_factor=simulated / wall_s if wall_s > 0 else 0.0,
+            threads=world.threads,
             centroid_start=self.start_centroid,
             centroid_end=end,
             distance_to_light_start=self.start_distance,

@@ -8,6 +8,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -254,6 +255,12 @@ class World:
     def count(self) -> int:
         """Particles (passive objects are not particles)."""
         return int(self._pos.shape[1])
+
+    @property
+    def threads(self) -> int:
+        """Threads a step of this world runs on now, from the calling thread: numba's count for
+        it (numba.set_num_threads), or 1 for a swarm below PARALLEL_FROM."""
+        return 1 if self._bounds.shape[0] == 2 else numba.get_num_threads()
 
     @property
     def steps(self) -> int:

@@ -235,7 +235,8 @@ def run(args: argparse.Namespace) -> int:
 def _use_threads(threads: int) -> None:
     """Runs the kernels on `threads` threads. Several runs that each take every core slow one
     another down far more than their share (a 10,000-particle step waits at each parallel region
-    for a thread another process holds: 20-40 steps/s against 1,250 on one thread each)."""
+    for a thread another process holds: on two cores, two-thread runs side by side made 20-118
+    steps/s, a one-thread run beside them ~1,250)."""
     import numba
 
     from particlebot.sim.scenarios.scenario import ScenarioError

@@ -33,8 +33,8 @@ a cluster passes; a deterministic error fails twice and is recorded."""
 PROGRESS_TOPIC = "particlebot-run-progress"
 """Dask event topic on which workers report how far their runs are."""
 PROGRESS_EVERY_S = 5.0
-"""A run reports at most this often: a 10,000-particle run takes half an hour, and a cluster of
-hundreds of workers should not flood the scheduler."""
+"""A run reports at most this often: a 10,000-particle run takes ten minutes or more, and a
+cluster of hundreds of workers should not flood the scheduler."""
 LOG = logging.getLogger(__name__)
 
 
@@ -195,6 +195,9 @@ def run_pending(
             f"the workers could not prepare for the runs ({type(exc).__name__}: {first}); "
             "is particlebot installed there, at the same commit?"
         ) from None
+    client.subscribe_topic(
+        PROGRESS_TOPIC, _progress_handler(progress, {spec.run_id: spec for spec in todo})
+    )
     by_key: dict[str, RunSpec] = {}
     futures: list[Future] = []
     for spec in todo:
@@ -204,9 +207,6 @@ def run_pending(
         futures.append(
             client.submit(execute_reporting, runner, spec, key=key, retries=EXCEPTION_RETRIES)
         )
-    client.subscribe_topic(
-        PROGRESS_TOPIC, _progress_handler(progress, {spec.run_id: spec for spec in todo})
-    )
     progress.start()
     try:
         for future in as_completed(futures):

@@ -136,7 +136,7 @@ def markdown(
         "",
         f"{finished} of {planned} runs finished"
         + (f" by the {runner}" if runner != "simulator" else "")
-        + f"; seeds {options.first_seed}-{options.first_seed + options.seeds - 1}, "
+        + f"; {_seeds_text(options.first_seed, options.seeds)}, "
         + f"{options.duration_s:g} s simulated"
         + (f", the first {options.skip_s:g} s left out" if study.uses_skip else "")
         + f", placement {options.placement}"
@@ -344,3 +344,7 @@ FINDINGS: dict[str, Findings] = {
     "noise": _noise_findings,
     "annex": _annex_findings,
 }
+
+
+def _seeds_text(first: int, count: int) -> str:
+    return f"seed {first}" if count == 1 else f"seeds {first}-{first + count - 1}"

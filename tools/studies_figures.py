@@ -11,9 +11,9 @@ import csv
 import math
 from collections import defaultdict
 from pathlib import Path
+from typing import Any
 
 import matplotlib
-import numpy as np
 
 matplotlib.use("Agg")
 
@@ -57,7 +57,6 @@ COLOURS = {10: "tab:blue", 30: "tab:purple", 100: "tab:orange", 1000: "tab:green
 PUBLISHED_DEAD = (
     "dead-small",
     "dead-high",
-    "dead-1000-all",
     "dead-1000",
     "dead-1000-high",
     "dead-10000",
@@ -75,6 +74,15 @@ def gather(results: Path, names: tuple[str, ...], metric: str) -> Cells:
             ours[n].extend(cell for cell in cells if cell[0] not in have)
             ours[n].sort()
     return ours
+
+
+def sds_of_pairs(row: list[tuple[int, float, float]]) -> list[float]:
+    """The sd of each (size, mean, sd); 0 where one run left no sd."""
+    return [0.0 if math.isnan(sd) else sd for *_, sd in row]
+
+
+def count(k: int, noun: str) -> str:
+    return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
 
 
 def sds_of(cells: list[tuple[float, float, float, int]], scale: float = 1.0) -> list[float]:
@@ -98,8 +106,10 @@ def band(
     )
 
 
-def save(fig: plt.Figure, path: Path) -> Path:
-    fig.tight_layout()
+def save(fig: plt.Figure, path: Path, layout: bool = True) -> Path:
+    """Writes fig; layout=False keeps a layout the caller made (room for a shared legend)."""
+    if layout:
+        fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
     return path
@@ -116,7 +126,15 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
         means = [m for _, m, _, _ in cells]
         runs = min(r for *_, r in cells)
-        band(absolute, x, means, sds_of(cells), colour, f"{n:,} ours ({runs} seeds)", alpha=0.18)
+        band(
+            absolute,
+            x,
+            means,
+            sds_of(cells),
+            colour,
+            f"{n:,} ours ({count(runs, 'seed')})",
+            alpha=0.18,
+        )
         relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")
         published = paper.TABLE_S3_MM_S[n]
         px = [100 * f for f in published if f <= max(f for f, *_ in cells) + 1e-9]
@@ -153,41 +171,60 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
             "dead-cand-1000c",
             "dead-cand-10000",
         ),
+        "torque limit 0.7, shear 20 (calmer still)": ("dead-calm-1000", "dead-calm-10000"),
     }
     found = {label: gather(results, names, "speed_mm_s") for label, names in variants.items()}
     found = {label: cells for label, cells in found.items() if cells}
     sizes = sorted({n for label, cells in found.items() if label != "published defaults"
                     for n in cells})  # fmt: skip
     if len(found) > 1:
-        fig, axes = plt.subplots(1, len(sizes), figsize=(5.5 * len(sizes), 4.6), dpi=120)
-        for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
+        columns = 2 if len(sizes) == 4 else len(sizes)  # four panels as two rows of two
+        rows = math.ceil(len(sizes) / columns)
+        fig, axes = plt.subplots(
+            rows, columns, figsize=(5.5 * columns, 4.6 * rows), dpi=120, squeeze=False
+        )
+        order = list(variants)
+        handles: dict[str, Any] = {}
+        for ax, n in zip(axes.flat, sizes, strict=False):
             published = paper.TABLE_S3_MM_S[n]
             top = max(f for variant in found.values() for f, *_ in variant.get(n, []) if f <= 0.5)
             px = [f for f in published if f <= top + 1e-9]
-            ax.errorbar(
+            handles["paper (Table S3)"] = ax.errorbar(
                 [100 * f for f in px], [published[f].mean for f in px],
                 yerr=[published[f].sd for f in px], fmt="s", mfc="white", color="k", ms=4,
-                capsize=3, lw=1, label="paper (Table S3)",
+                capsize=3, lw=1,
             )  # fmt: skip
+            seeds = []
             for label, variant in found.items():
-                colour = f"C{list(variants).index(label)}"  # the same in every panel
                 row = [cell for cell in variant.get(n, []) if cell[0] <= top + 1e-9]
                 if not row:
                     continue
-                runs = min(r for *_, r in row)
-                ax.errorbar(
-                    [100 * f + 0.5 * len(ax.lines) for f, *_ in row], [m for _, m, _, _ in row],
-                    yerr=sds_of(row), fmt="o-", ms=3.5, color=colour,
-                    capsize=2, lw=1, label=f"ours, {label} ({runs} seeds)",
+                seeds += [r for *_, r in row]
+                # Side by side around the true x, by a fixed share of the panel's width.
+                index = order.index(label)
+                shift = (index - (len(order) - 1) / 2) * 0.012 * 100 * max(top, 0.2)
+                handles[f"ours, {label}"] = ax.errorbar(
+                    [100 * f + shift for f, *_ in row], [m for _, m, _, _ in row],
+                    yerr=sds_of(row), fmt="o-", ms=3.5, color=f"C{index}",
+                    capsize=2, lw=1,
                 )  # fmt: skip
-            ax.set_title(f"{n:,} particles", fontsize=10)
+            lo, hi = min(seeds), max(seeds)
+            seeds_text = count(lo, "seed") if lo == hi else f"{lo}-{hi} seeds"
+            ax.set_title(f"{n:,} particles ({seeds_text} a cell)", fontsize=10)
             ax.set_xlabel("dead particles (%)")
             ax.set_ylabel("speed toward the light (mm/s)")
             ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=7.5)
+        for ax in list(axes.flat)[len(sizes) :]:
+            ax.set_visible(False)
+        # One legend for all panels: a variant has the same colour in each.
+        fig.legend(
+            list(handles.values()), list(handles), loc="lower center", ncol=2, fontsize=8,
+            frameon=False,
+        )  # fmt: skip
         fig.suptitle("Table S3 with published numbers changed (2 h, first 30 min left out)")
-        paths.append(save(fig, out / "dead-variants.png"))
+        fig.tight_layout(rect=(0, 0.02 + 0.022 * math.ceil(len(handles) / 2), 1, 1))
+        paths.append(save(fig, out / "dead-variants.png", layout=False))
     return paths
 
 
@@ -195,7 +232,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
     sizes it did not run, beside Table S3's 0 % column."""
     points: dict[int, tuple[float, float, int]] = {}
-    for name in ("dead-1000-all", "dead-1000", "dead-10000", "speed-small"):
+    for name in ("dead-1000", "dead-10000", "speed-small"):
         for n, cells in read(results / name, "speed_mm_s").items():
             for value, mean, sd, runs in cells:
                 if value == 0.0:
@@ -206,7 +243,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7.5, 4.6), dpi=120)
     means = [points[n][0] for n in sizes]
     sds = [0.0 if math.isnan(points[n][1]) else points[n][1] for n in sizes]
-    ax.plot(sizes, means, "o-", color="tab:blue", ms=4, label="ours (mean ± 1 sd over seeds)")
+    ax.plot(sizes, means, "o-", color="tab:blue", ms=4, label="ours, published numbers (± 1 sd)")
     ax.fill_between(
         sizes,
         [m - s for m, s in zip(means, sds, strict=True)],
@@ -218,6 +255,24 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     for n in sizes:
         ax.annotate(f"{points[n][2]}", (n, points[n][0]), textcoords="offset points", xytext=(4, 6),
                     fontsize=7, color="tab:blue")  # fmt: skip
+    # The same with published numbers changed (the dead study's variants, 0 % cells).
+    variants = {
+        "torque limit 0.7, shear 30 (the fitted pair)": (
+            "dead-cand-small", "dead-cand-1000", "dead-cand-10000",
+        ),
+        "torque limit 0.7, shear 20": ("dead-calm-1000", "dead-calm-10000"),
+    }  # fmt: skip
+    for (label, names), colour in zip(variants.items(), ("tab:purple", "tab:brown"), strict=True):
+        row = [
+            (n, cells[0][1], cells[0][2])
+            for n, cells in sorted(gather(results, names, "speed_mm_s").items())
+            if cells and cells[0][0] == 0.0
+        ]
+        if row:
+            ax.errorbar(
+                [n for n, *_ in row], [m for _, m, _ in row], yerr=sds_of_pairs(row),
+                fmt="o--", ms=3.5, color=colour, capsize=2, lw=1, label=f"ours, {label}",
+            )  # fmt: skip
     published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
     ax.errorbar(
         list(published), [c.mean for c in published.values()],
@@ -247,7 +302,7 @@ def gap_figure(results: Path, out: Path) -> list[Path]:
         x = [100 * f for f, *_ in cells]
         means = [m for _, m, _, _ in cells]
         runs = min(r for *_, r in cells)
-        label = f"{n:,} particles ({runs} runs)"
+        label = f"{n:,} particles ({count(runs, 'run')})"
         band(ax, x, means, sds_of(cells), colour, label, low=0.0, high=1.0)
     ax.set_xlabel("gap (% of the densest packing diameter)")
     ax.set_ylabel("fraction of the particles through the gap")
@@ -275,7 +330,7 @@ def noise_figure(results: Path, out: Path) -> list[Path]:
         x = [f for f, *_ in cells]
         rel = [m / base for _, m, _, _ in cells]
         runs = min(r for *_, r in cells)
-        label = f"{n:,} particles, ours ({runs} seeds)"
+        label = f"{n:,} particles, ours ({count(runs, 'seed')})"
         band(ax, x, rel, sds_of(cells, scale=base), colour, label)
     ax.plot(
         [0.0, 1.0], [1.0, paper.FIG_S20_RELATIVE_SPEED_AT_ONE_DIAMETER], "kD", mfc="white",

@@ -463,7 +463,13 @@ def test_quitting_while_particles_move_asks_and_can_stop_them_first() -> None:
         assert radio.sent_frames()[0].message == Stop()
         assert app.is_running  # until every particle confirms
         radio.clock.advance(0.4)  # the whole burst is due
-        await refreshed(pilot)
+        # A poll sends one copy of the burst, and the quit waits for the last one: poll until
+        # it is out (the app's own timer may have sent some already; relying on it raced).
+        stop = app.model.last("STOP")
+        assert stop is not None
+        for _ in range(len(stop.burst)):
+            await refreshed(pilot)
+        assert stop.burst_sent and app.is_running
         hear_particles(radio, app, state=int(State.IDLE))
         await refreshed(pilot)
         assert not app.is_running

@@ -260,9 +260,11 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
         "torque limit 0.7, shear 30 (the fitted pair)": (
             "dead-cand-small", "dead-cand-1000", "dead-cand-10000",
         ),
+        "torque limit 0.7, shear 25": ("dead-mid", "dead-mid-1000", "dead-mid-10000"),
         "torque limit 0.7, shear 20": ("dead-calm-1000", "dead-calm-10000"),
     }  # fmt: skip
-    for (label, names), colour in zip(variants.items(), ("tab:purple", "tab:brown"), strict=True):
+    colours = ("tab:purple", "tab:olive", "tab:brown")
+    for (label, names), colour in zip(variants.items(), colours, strict=True):
         row = [
             (n, cells[0][1], cells[0][2])
             for n, cells in sorted(gather(results, names, "speed_mm_s").items())

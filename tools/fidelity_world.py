@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 
 from particlebot.protocol import Method
@@ -440,7 +441,11 @@ def main() -> int:
     began = time.perf_counter()
     results: dict[str, dict[int, list[float]]] = {v.name: {} for v in chosen}
     measured: dict[str, dict[int, dict[str, list[float]]]] = {v.name: {} for v in chosen}
-    with ProcessPoolExecutor(args.workers) as pool:
+    # One numba thread per process: a process per core, each with a thread per core, makes
+    # swarms of 2,048 particles and more wait on each other's threads (docs/studies.md).
+    with ProcessPoolExecutor(
+        args.workers, initializer=numba.set_num_threads, initargs=(1,)
+    ) as pool:
         futures = [pool.submit(speed_run, v, n, s, args.duration) for v, n, s in jobs]
         for done, ((v, n, _), future) in enumerate(zip(jobs, futures, strict=True), start=1):
             by_measure = speeds(future.result(), args.skip)

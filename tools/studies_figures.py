@@ -76,11 +76,6 @@ def gather(results: Path, names: tuple[str, ...], metric: str) -> Cells:
     return ours
 
 
-def sds_of_pairs(row: list[tuple[int, float, float]]) -> list[float]:
-    """The sd of each (size, mean, sd); 0 where one run left no sd."""
-    return [0.0 if math.isnan(sd) else sd for *_, sd in row]
-
-
 def count(k: int, noun: str) -> str:
     return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
 
@@ -265,14 +260,14 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     }  # fmt: skip
     colours = ("tab:purple", "tab:olive", "tab:brown")
     for (label, names), colour in zip(variants.items(), colours, strict=True):
-        row = [
-            (n, cells[0][1], cells[0][2])
+        zero = {
+            n: cells[0]
             for n, cells in sorted(gather(results, names, "speed_mm_s").items())
             if cells and cells[0][0] == 0.0
-        ]
-        if row:
+        }
+        if zero:
             ax.errorbar(
-                [n for n, *_ in row], [m for _, m, _ in row], yerr=sds_of_pairs(row),
+                list(zero), [m for _, m, _, _ in zero.values()], yerr=sds_of(list(zero.values())),
                 fmt="o--", ms=3.5, color=colour, capsize=2, lw=1, label=f"ours, {label}",
             )  # fmt: skip
     published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}

@@ -8,7 +8,7 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, TextIO
@@ -154,7 +154,9 @@ def execute_reporting(runner: Runner, spec: RunSpec) -> RunRecord:
     return execute(runner, spec, ReportToClient(spec.run_id))
 
 
-def _progress_handler(progress: Progress, by_run: dict[str, RunSpec]) -> Any:
+def _progress_handler(
+    progress: Progress, by_run: dict[str, RunSpec]
+) -> Callable[[tuple[float, Any]], None]:
     def heard(event: tuple[float, Any]) -> None:
         _timestamp, message = event
         try:

@@ -28,8 +28,9 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     world.step(20)
     w = world
     ncx, ncy, cells, start = k._prepare(
-        w._pos, w._ref, w._vel, w._vel_old, w._body, w._flags, w._ext, w._bounds, w._prm, True
-    )
+        w._pos, w._ref, w._vel, w._vel_old, w._body, w._flags, w._ext, w._bounds, w._prm, True,
+        w.threads,
+    )  # fmt: skip
     w._flags[k.F_KIND, ::20] = k.FREE  # some to be annexed when they touch the robot
     sums = {}
     for block in (k.PAIR_BLOCK, 37):
@@ -70,3 +71,40 @@ def test_the_parallel_path_follows_the_plain_numpy_transcription_too(
     assert np.abs(world.radii() - reference.r).max() < 1e-9
     assert worst < 1e-9
     assert world.rebuilds > 1 and np.abs(world.state().vx).max() > 0  # and something happened
+
+
+@pytest.mark.parametrize("splits", [1, 2, 3, 7])
+def test_binning_and_reordering_in_parts_equal_the_serial_passes(splits: int) -> None:
+    # Large swarms on several threads bin and re-order in parts: the grid, the stable order
+    # within each cell and every re-ordered row must be exactly the serial passes', or results
+    # would depend on the number of threads. Particles sharing cells, and some sharing a place.
+    rng = np.random.default_rng(splits)
+    n = 3001
+    pos = np.stack([rng.uniform(-3.0, 5.0, n), rng.uniform(-2.0, 1.0, n)])
+    pos[:, 100:140] = pos[:, 7:8]  # 41 particles in one place
+    radius = 0.265
+    serial = k._grid(pos, radius)
+    parts = k._grid_split(pos, radius, splits)
+    assert serial[:2] == parts[:2]
+    for a, b in zip(serial[2:], parts[2:], strict=True):
+        assert np.array_equal(a, b)
+    order = serial[4]
+    assert not np.array_equal(order, np.arange(n))
+
+    # Rows with values that tell slots apart: pos, ref, vel, vel_old, body, flags, ext.
+    vel = rng.normal(size=(2, n))
+    body = rng.normal(size=(k.BODY_ROWS, n))
+    flags = rng.integers(0, 255, (k.FLAG_ROWS, n), np.uint8)
+    ext = rng.permutation(n).astype(np.int64)
+    plain = (pos.copy(), np.zeros((2, n)), vel.copy(), np.zeros((2, n)), body.copy(),
+             flags.copy(), ext.copy())  # fmt: skip
+    k._reorder(order, *plain)
+    split = (pos.copy(), np.zeros((2, n)), vel.copy(), np.zeros((2, n)), body.copy(),
+             flags.copy(), ext.copy())  # fmt: skip
+    cells = k._reorder_split(order, serial[2], *split, splits)
+    for a, b in zip(plain, split, strict=True):
+        if a.shape[0] == k.BODY_ROWS:  # the force rows are a step's own: not carried
+            a, b = a[: k.BODY_KEPT], b[: k.BODY_KEPT]
+        assert np.array_equal(a, b)
+    assert np.array_equal(cells, serial[2][order])
+    assert np.all(np.diff(cells) >= 0)  # in cell order

@@ -159,7 +159,7 @@ class World:
         self._setup_derived(n)
         self._nbr = k.build_lists(
             self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
-            self._nbr, self._ncount, self._bounds, self._prm, True,
+            self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._refresh_shadows()
         controller.bind(n, np.random.default_rng(controller_seed))
@@ -364,7 +364,7 @@ class World:
                     rows, self._targets, self._ext, self._pos, self._ref, self._vel,
                     self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._listed,
                     self._rects, self._circles, self._objects, self._acc, self._bounds,
-                    self._pair_index, self._pair_values, self._prm,
+                    self._pair_index, self._pair_values, self._prm, self.threads,
                 )  # fmt: skip
             self.rebuilds += rebuilds
             self._steps += rows
@@ -403,7 +403,7 @@ class World:
         self._vel_old[:, slot] = 0.0
         self._nbr = k.build_lists(
             self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
-            self._nbr, self._ncount, self._bounds, self._prm, True,
+            self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._listed = True
         if self._stale:
@@ -524,7 +524,7 @@ class World:
         world._nbr = k.build_lists(
             world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
             world._flags, world._ext, world._nbr, world._ncount, world._bounds, world._prm,
-            False,
+            False, world.threads,
         )  # fmt: skip
         if world._stale and "stale_hashes" in a:
             world._stale_hashes = a["stale_hashes"].copy()

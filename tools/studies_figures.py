@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Draws docs/studies' comparison figures from the summary.csv files of finished study folders:
 dead-particle speeds relative to each size's 0 % cell and with one published number changed,
-Fig. S18 (gap success against gap size, all sizes on one plot) and Fig. S20 relative to the
-noise-free speed. Folders that are missing are left out of the figures."""
+speed against size and against the contact shear, Fig. S18 (gap success against gap size, all
+sizes on one plot) and Fig. S20 relative to the noise-free speed. Folders that are missing are
+left out of the figures."""
 
 from __future__ import annotations
 
@@ -289,6 +290,69 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     return [save(fig, out / "speed.png")]
 
 
+SHEAR_SETS = {
+    20.0: ("dead-calm-1000", "dead-calm-10000"),
+    25.0: ("dead-mid", "dead-mid-1000", "dead-mid-10000"),
+    27.5: ("shear27.5-small", "shear27.5-1000", "shear27.5-10000"),
+    28.5: ("shear28.5-small", "shear28.5-1000", "shear28.5-10000"),
+    29.0: ("shear29-small", "shear29-1000", "shear29-10000"),
+    30.0: ("dead-cand-small", "dead-cand-1000", "dead-cand-10000"),
+}
+"""Study folders of the 0 % cells with torque limit 0.7, by shear (`--set torque_limit=0.7,
+shear=S`)."""
+
+
+def shear_figure(results: Path, out: Path) -> list[Path]:
+    """Speed at 0 % dead against the shear (torque limit 0.7) for each size, beside Table S3's
+    band, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
+    by_size: dict[int, list[tuple[float, float, float, int]]] = defaultdict(list)
+    for shear, names in SHEAR_SETS.items():
+        for n, cells in gather(results, names, "speed_mm_s").items():
+            if cells and cells[0][0] == 0.0:
+                _, mean, sd, runs = cells[0]
+                by_size[n].append((shear, mean, sd, runs))
+    if not by_size:
+        return []
+    rattle_csv = out / "rattle-shear.csv"
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), dpi=120)
+    for n, cells in sorted(by_size.items()):
+        colour = COLOURS.get(n, "tab:gray")
+        shears = [c[0] for c in cells]
+        left.errorbar(
+            shears, [c[1] for c in cells], yerr=sds_of(cells), fmt="o-", ms=3.5, color=colour,
+            capsize=2, lw=1, label=f"{n:,} ({count(min(c[3] for c in cells), 'seed')} a point)",
+        )  # fmt: skip
+        published = paper.TABLE_S3_MM_S[n][0.0]
+        left.axhspan(published.mean - published.sd, published.mean + published.sd, color=colour,
+                     alpha=0.12, lw=0)  # fmt: skip
+        left.axhline(published.mean, color=colour, lw=0.8, ls=":")
+    left.set_xlabel("contact shear (1/s; published 40), torque limit 0.7")
+    left.set_ylabel("speed toward the light (mm/s), 0 % dead")
+    left.set_title("Ours (points, ± 1 sd) against Table S3 (shaded: ± 1 sd)", fontsize=10)
+    left.grid(alpha=0.3)
+    left.legend(fontsize=8, title="particles", title_fontsize=8)
+    if rattle_csv.is_file():
+        with rattle_csv.open(newline="") as stream:
+            rows = list(csv.DictReader(stream))
+        for n in sorted({int(r["particles"]) for r in rows}):
+            # (a share of 0, none seen, has no place on the log axis: left out)
+            mine = sorted(
+                (float(r["shear"]), float(r["rattling_share"])) for r in rows
+                if int(r["particles"]) == n and float(r["rattling_share"]) > 0
+            )  # fmt: skip
+            right.semilogy([sh for sh, _ in mine], [100 * v for _, v in mine], "o-", ms=3.5,
+                           color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
+        right.set_xlabel("contact shear (1/s), torque limit 0.7")
+        right.set_ylabel("particles faster than 0.1 m/s (%)")
+        right.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
+        right.grid(alpha=0.3, which="both")
+        right.legend(fontsize=8, title="particles", title_fontsize=8)
+    else:
+        right.set_axis_off()
+    fig.suptitle("Table S3's 0 % column against the contact shear (2 h, first 30 min left out)")
+    return [save(fig, out / "shear.png")]
+
+
 def gap_figure(results: Path, out: Path) -> list[Path]:
     ours = gather(results, ("gap-10", "gap-100", "gap-1000"), "success")
     if not ours:
@@ -356,6 +420,7 @@ def main() -> None:
     for path in (
         dead_figures(args.results, args.out)
         + speed_figure(args.results, args.out)
+        + shear_figure(args.results, args.out)
         + gap_figure(args.results, args.out)
         + noise_figure(args.results, args.out)
     ):

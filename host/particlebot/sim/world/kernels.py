@@ -263,6 +263,15 @@ def _friction(
 # ---- the passes of a step (each over particles lo..hi) -----------------------------------------
 
 
+@numba.njit(cache=True, inline="always")
+def _slot(i: int) -> int:
+    """A particle's slot as an unsigned index. Numba checks every signed index for a negative
+    value (to count it from the end), on every access: a loop over range(lo, hi) cannot tell it
+    never is. An unsigned index it takes as is (a plain copy loop: 0.64 -> 0.33 ns an element).
+    Only for indexing: uint64 mixed with int64 arithmetic gives float64 in numba."""
+    return numba.uint64(i)  # type: ignore[return-value]
+
+
 @numba.njit(cache=True)
 def _kinematics(
     lo: int, hi: int, step: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
@@ -276,7 +285,8 @@ def _kinematics(
     dt = prm[P_DT]
     wall = prm[P_HALF_WIDTH]
     worst = 0.0
-    for i in range(lo, hi):
+    for signed in range(lo, hi):
+        i = _slot(signed)
         if flags[F_JOINED, i]:
             flags[F_JOINED, i] = 0
             flags[F_KIND, i] = MEMBER
@@ -380,7 +390,8 @@ def _pairs_each(
     (i in lo..hi, j > i) once, from the new positions and old velocities; i gets f and j gets
     -f, both get |f| in their contact or attraction sum. Bit for bit what small swarms have
     always run (tests pin their trajectories); large swarms take _pairs_cells and _pairs."""
-    for i in range(lo, hi):
+    for signed in range(lo, hi):
+        i = _slot(signed)
         xi = pos[0, i]
         yi = pos[1, i]
         vxi = vel_old[0, i]
@@ -393,7 +404,7 @@ def _pairs_each(
         f_contact = 0.0
         f_attract = 0.0
         for k in range(ncount[i]):
-            j = nbr[i, k]
+            j = _slot(nbr[i, k])
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
             px, py, contact, attract = _pair(
@@ -459,8 +470,8 @@ def _pair_block(
     inputs = values[:PAIR_INPUTS]
     outputs = values[PAIR_INPUTS:]
     for q in range(count):
-        j = partner[q]
-        i = index[1, q]
+        j = _slot(partner[q])
+        i = _slot(index[1, q])
         inputs[0, q] = pos[0, j] - pos[0, i]
         inputs[1, q] = pos[1, j] - pos[1, i]
         inputs[2, q] = body[B_R, i] + body[B_R, j]
@@ -476,8 +487,8 @@ def _pair_block(
         outputs[0], outputs[1], outputs[2], outputs[3], outputs[4],
     )  # fmt: skip
     for q in range(count):
-        j = partner[q]
-        i = index[1, q]
+        j = _slot(partner[q])
+        i = _slot(index[1, q])
         px = outputs[0, q]
         py = outputs[1, q]
         contact = outputs[2, q]
@@ -502,10 +513,11 @@ def _pick(
 ) -> int:  # fmt: skip
     """Puts the pair (i, j) at the end of the block and keeps it if it is within reach
     (branch-free: the test is a coin toss a branch predictor loses). Returns the new count."""
-    dx = pos[0, j] - xi
-    dy = pos[1, j] - yi
+    u = _slot(j)
+    dx = pos[0, u] - xi
+    dy = pos[1, u] - yi
     d2 = dx * dx + dy * dy
-    reach = ri + body[B_R, j] + cutoff
+    reach = ri + body[B_R, u] + cutoff
     index[0, count] = j
     index[1, count] = i
     return count + ((d2 < reach * reach) & (d2 != 0.0))
@@ -633,7 +645,8 @@ def _settle(
     static = prm[P_STATIC]
     acc[:, :] = 0.0
     check_obstacles = rects.shape[0] + circles.shape[0] > 0
-    for i in range(lo, hi):
+    for signed in range(lo, hi):
+        i = _slot(signed)
         xi = pos[0, i]
         yi = pos[1, i]
         vxi = vel_old[0, i]
@@ -1030,15 +1043,17 @@ def _fill_lists(
         row = cy * ncx
         right = min(cx + 1, ncx - 1)
         for j in range(i + 1, start[row + right + 1]):
-            dx = pos[0, j] - xi
-            dy = pos[1, j] - yi
+            u = _slot(j)
+            dx = pos[0, u] - xi
+            dy = pos[1, u] - yi
             nbr[i, min(count, width)] = j
             count += dx * dx + dy * dy < r2
         if cy + 1 < ncy:
             above = row + ncx
             for j in range(start[above + max(cx - 1, 0)], start[above + right + 1]):
-                dx = pos[0, j] - xi
-                dy = pos[1, j] - yi
+                u = _slot(j)
+                dx = pos[0, u] - xi
+                dy = pos[1, u] - yi
                 nbr[i, min(count, width)] = j
                 count += dx * dx + dy * dy < r2
         ncount[i] = min(count, width)

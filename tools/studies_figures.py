@@ -60,6 +60,7 @@ PUBLISHED_DEAD = (
     "dead-high",
     "dead-1000",
     "dead-1000-high",
+    "dead-10000-s3",  # the 0 % cell with 3 seeds
     "dead-10000",
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
@@ -228,7 +229,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
     sizes it did not run, beside Table S3's 0 % column."""
     points: dict[int, tuple[float, float, int]] = {}
-    for name in ("dead-1000", "dead-10000", "speed-small"):
+    for name in ("dead-1000", "dead-10000", "dead-10000-s3", "speed-small"):
         for n, cells in read(results / name, "speed_mm_s").items():
             for value, mean, sd, runs in cells:
                 if value == 0.0:

@@ -895,35 +895,17 @@ def _grid(pos: FloatArray, radius: float) -> tuple[int, int, IntArray, IntArray,
     """Bins particles into square cells at least `radius` wide over their bounding box (wider
     when needed to keep at most ~2 cells per particle). Returns the grid's shape, each
     particle's cell (row-major), the cells' start offsets and the particles cell by cell (a
-    stable counting sort: index order within a cell)."""
+    stable counting sort: index order within a cell). _grid_split is the same in parts."""
     n = pos.shape[1]
-    x0 = pos[0, 0]
-    x1 = x0
-    y0 = pos[1, 0]
-    y1 = y0
-    for i in range(n):
-        x0 = min(x0, pos[0, i])
-        x1 = max(x1, pos[0, i])
-        y0 = min(y0, pos[1, i])
-        y1 = max(y1, pos[1, i])
-    width = x1 - x0 + radius
-    height = y1 - y0 + radius
-    size = max(radius, math.sqrt(width * height / (2.0 * n + 64.0)))
-    ncx = int(width / size) + 1
-    ncy = int(height / size) + 1
+    box = np.empty((1, 4))
+    _box(pos[0], pos[1], box[0])
+    ncx, ncy, size = _grid_shape(box, radius, n)
     cells = np.empty(n, dtype=np.int64)
-    start = np.zeros(ncx * ncy + 1, dtype=np.int64)
-    for i in range(n):
-        c = int((pos[1, i] - y0) / size) * ncx + int((pos[0, i] - x0) / size)
-        cells[i] = c
-        start[c + 1] += 1
-    for c in range(ncx * ncy):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
+    offset = np.zeros((1, ncx * ncy), dtype=np.int64)
+    _bin(pos[0], pos[1], box[0, 0], box[0, 2], size, ncx, cells, offset[0])
+    start = _offsets(offset)
     members = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        members[fill[cells[i]]] = i
-        fill[cells[i]] += 1
+    _deal(0, cells, offset[0], members)
     return ncx, ncy, cells, start, members
 
 
@@ -949,6 +931,34 @@ def _box(xs: FloatArray, ys: FloatArray, out: FloatArray) -> None:
     out[1] = x1
     out[2] = y0
     out[3] = y1
+
+
+@numba.njit(cache=True)
+def _grid_shape(box: FloatArray, radius: float, n: int) -> tuple[int, int, float]:
+    """The grid over the bounding boxes of parts (rows: x min, x max, y min, y max) of n
+    particles: its columns, rows and cell size."""
+    width = box[:, 1].max() - box[:, 0].min() + radius
+    height = box[:, 3].max() - box[:, 2].min() + radius
+    size = max(radius, math.sqrt(width * height / (2.0 * n + 64.0)))
+    return int(width / size) + 1, int(height / size) + 1, size
+
+
+@numba.njit(cache=True)
+def _offsets(offset: IntArray) -> IntArray:
+    """Turns each part's per-cell counts (a row per part) into where its first member of each
+    cell goes: cell by cell, part by part, so that the parts together make one stable counting
+    sort. Returns the cells' start offsets."""
+    parts, ncells = offset.shape
+    start = np.empty(ncells + 1, dtype=np.int64)
+    total = 0
+    for c in range(ncells):
+        start[c] = total
+        for s in range(parts):
+            here = offset[s, c]
+            offset[s, c] = total
+            total += here
+    start[ncells] = total
+    return start
 
 
 @numba.njit(cache=True)
@@ -993,27 +1003,14 @@ def _grid_split(
         _box(pos[0, lo:hi], pos[1, lo:hi], box[s])
     x0 = box[:, 0].min()
     y0 = box[:, 2].min()
-    width = box[:, 1].max() - x0 + radius
-    height = box[:, 3].max() - y0 + radius
-    size = max(radius, math.sqrt(width * height / (2.0 * n + 64.0)))
-    ncx = int(width / size) + 1
-    ncy = int(height / size) + 1
-    ncells = ncx * ncy
+    ncx, ncy, size = _grid_shape(box, radius, n)
     cells = np.empty(n, dtype=np.int64)
-    # A row of counts per range (no two threads write one cache line but at the seams).
-    offset = np.zeros((splits, ncells), dtype=np.int64)
+    # A row of counts per part (no two threads write one cache line but at the seams).
+    offset = np.zeros((splits, ncx * ncy), dtype=np.int64)
     for s in numba.prange(splits):
         lo, hi = _split(s, splits, n)
         _bin(pos[0, lo:hi], pos[1, lo:hi], x0, y0, size, ncx, cells[lo:hi], offset[s])
-    start = np.empty(ncells + 1, dtype=np.int64)
-    total = 0
-    for c in range(ncells):  # cell by cell, range by range: where each range's members go
-        start[c] = total
-        for s in range(splits):
-            here = offset[s, c]
-            offset[s, c] = total
-            total += here
-    start[ncells] = total
+    start = _offsets(offset)
     members = np.empty(n, dtype=np.int64)
     for s in numba.prange(splits):
         lo, hi = _split(s, splits, n)

@@ -22,7 +22,7 @@ from particlebot.sim.world.params import PhysicsParams
 from particlebot.sim.world.world import PARALLEL_FROM
 from particlebot.studies import published as paper
 from particlebot.studies import seam
-from particlebot.studies.definitions import STUDIES, RawOptions, resolve
+from particlebot.studies.definitions import PLACEMENTS, STUDIES, RawOptions, resolve
 from particlebot.studies.runners import SimulatorRunner, execute
 from particlebot.studies.spec import Rect, WorldSetup
 
@@ -74,6 +74,19 @@ def test_the_study_frame_is_the_simulators_moved_to_the_initial_centroid() -> No
     )
     # The wall holds: no centre got past its near face less a radius.
     assert final[:, 0].max() < 0.6 - paper.R_MIN_M + 1e-3
+
+
+def test_every_placement_option_reaches_the_scenario_and_names_its_own_runs() -> None:
+    assert set(seam.PLACEMENT_KINDS) == set(PLACEMENTS)
+    open_floor = replace(WALLED, rects=())
+    for name, kind in seam.PLACEMENT_KINDS.items():
+        assert seam.frame(replace(open_floor, placement=name)).scenario.swarm.placement is kind
+    study = STUDIES["dead"]
+    run_ids = {
+        study.specs(resolve(study, RawOptions(sizes="10", seeds="1", placement=name)))[0].run_id
+        for name in PLACEMENTS
+    }
+    assert len(run_ids) == len(PLACEMENTS)
 
 
 def test_published_numbers_changed_with_set_reach_the_world_and_the_controller() -> None:

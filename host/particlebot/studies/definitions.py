@@ -19,7 +19,7 @@ from particlebot.studies.packing import densest_packing_diameter_m
 from particlebot.studies.published import CYCLE_S, D_MIN_M, R_MIN_M, Published
 from particlebot.studies.spec import CellValue, PassiveObject, Rect, RunSpec, WorldSetup
 
-PLACEMENTS = ("blob", "hex", "line")
+PLACEMENTS = ("blob", "published-blob", "hex", "line")
 FAR_LAMP_M = 20.0
 """Where the speed studies put the lamp: this far beyond the swarm's densest-packing edge, so that
 no swarm reaches it within 2 h (10 particles cover about 9 m) and its wavefront is nearly flat."""

@@ -46,6 +46,7 @@ from particlebot.studies.spec import RunSpec, ShareDone, SimOutcome, Track, Worl
 
 PLACEMENT_KINDS = {
     "blob": PlacementKind.ALGORITHM5,
+    "published-blob": PlacementKind.ALGORITHM5_PUBLISHED,
     "hex": PlacementKind.HEX,
     "line": PlacementKind.LINE,
 }

@@ -85,7 +85,7 @@ def test_a_gap_configuration_becomes_its_scenario(tmp_path: Path) -> None:
     scenario = read_published_cfg(write(tmp_path, GAP))
 
     assert scenario.swarm.particles == 250
-    assert scenario.swarm.placement is PlacementKind.ALGORITHM5
+    assert scenario.swarm.placement is PlacementKind.ALGORITHM5_PUBLISHED
     assert scenario.swarm.at == PUBLISHED_START
     assert scenario.dead.count == 25 and scenario.dead.at_s == 300
     assert (scenario.lamp.x, scenario.lamp.y) == (-4.5, 0.5)

@@ -17,6 +17,7 @@ from particlebot.sim.scenarios.placement import (
     Placement,
     PlacementError,
     algorithm5,
+    algorithm5_published,
     from_file,
     hexagonal,
     line,
@@ -78,6 +79,8 @@ def place_swarm(scenario: Scenario) -> Placement:
             placement = hexagonal(swarm.particles, spacing, swarm.at)
         elif swarm.placement is PlacementKind.LINE:
             placement = line(swarm.particles, spacing, swarm.direction_deg, swarm.at)
+        elif swarm.placement is PlacementKind.ALGORITHM5_PUBLISHED:
+            placement = algorithm5_published(swarm.particles, params.r_min, rng, swarm.at)
         else:
             placement = algorithm5(swarm.particles, params.r_min, rng, swarm.at)
     except PlacementError as exc:

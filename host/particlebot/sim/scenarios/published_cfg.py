@@ -22,6 +22,7 @@ from typing import Any
 
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.scenarios.fields import suggestion
+from particlebot.sim.scenarios.placement import PUBLISHED_FIRST_DISC_M
 from particlebot.sim.scenarios.scenario import (
     ControllerSpec,
     DeadSpec,
@@ -38,7 +39,7 @@ from particlebot.sim.world.arena import Circle, Rect
 from particlebot.sim.world.light import ShadowMode
 from particlebot.sim.world.params import PhysicsParams
 
-PUBLISHED_START = (5.0, 0.0)
+PUBLISHED_START = PUBLISHED_FIRST_DISC_M
 """The published random placement puts its first particle here (m), its lamp by default at
 (-5, 0)."""
 
@@ -138,7 +139,7 @@ _PHYSICS = {
 }
 
 _PLACEMENTS = {
-    "CONFIG_RANDOM": PlacementKind.ALGORITHM5,
+    "CONFIG_RANDOM": PlacementKind.ALGORITHM5_PUBLISHED,
     "CONFIG_HEX": PlacementKind.HEX,
     "CONFIG_LINE": PlacementKind.LINE,
 }
@@ -324,7 +325,7 @@ def _scenario(values: dict[str, Any], lines: dict[str, int], path: Path) -> Scen
         raise fail("config", f"must be one of {', '.join(_PLACEMENTS)}, not {config!r}")
     placement = _PLACEMENTS[config]
     # Where the published placements put their first particle.
-    if placement is PlacementKind.ALGORITHM5:
+    if placement is PlacementKind.ALGORITHM5_PUBLISHED:
         at = PUBLISHED_START
     elif placement is PlacementKind.LINE:
         at = ((1 - particles) * physics.r_min, 0.0)  # a line centred on the origin

@@ -26,6 +26,9 @@ class PlacementKind(StrEnum):
 
     ALGORITHM5 = "algorithm5"
     """SI Algorithm 5: a random blob grown by tangent placements (the published default)."""
+    ALGORITHM5_PUBLISHED = "algorithm5-published"
+    """Algorithm 5 as the published code runs it: coarse pivot steps and, in large swarms, discs
+    put down a diameter out, so a sparser blob (placement.algorithm5_published)."""
     HEX = "hex"
     """A hexagonal blob, ring by ring around the first particle."""
     LINE = "line"

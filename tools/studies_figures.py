@@ -20,6 +20,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
 
+from particlebot.sim.world.params import PhysicsParams
 from particlebot.studies import published as paper
 
 Cells = dict[int, list[tuple[float, float, float, int]]]
@@ -354,6 +355,102 @@ def shear_figure(results: Path, out: Path) -> list[Path]:
     return [save(fig, out / "shear.png")]
 
 
+PLACEMENT_SETS = {
+    ("published numbers", "our Algorithm 5"): ("dead-small", "dead-1000", "dead-10000-s3"),
+    ("published numbers", "the published code's"): (
+        "place-pub-small", "place-pub-1000", "place-pub-10000",
+    ),
+    ("torque limit 0.7, shear 27.5", "our Algorithm 5"): (
+        "shear27.5-small", "shear27.5-1000", "shear27.5-10000",
+    ),
+    ("torque limit 0.7, shear 27.5", "the published code's"): (
+        "place-fit-small", "place-fit-1000", "place-fit-10000",
+    ),
+}  # fmt: skip
+"""Study folders of the 0 % cells by (numbers, placement): `--placement blob` or
+`--placement published-blob`."""
+
+
+def placement_figure(results: Path, out: Path) -> list[Path]:
+    """Speed against swarm size with our Algorithm 5 and the published code's placement, beside
+    Table S3's 0 % column; and how the 10,000-particle swarms pack and move over their runs
+    (tools/swarm_packing.py's CSV in `out`)."""
+    zero: dict[tuple[str, str], dict[int, tuple[float, float, float, int]]] = {}
+    for key, names in PLACEMENT_SETS.items():
+        cells = {n: c[0] for n, c in sorted(gather(results, names, "speed_mm_s").items())}
+        zero[key] = {n: c for n, c in cells.items() if c[0] == 0.0}
+    if not any(zero.values()):
+        return []
+    fig, (left, middle, right) = plt.subplots(1, 3, figsize=(16, 4.8), dpi=120)
+    colours = {"published numbers": "tab:blue", "torque limit 0.7, shear 27.5": "tab:green"}
+    styles = {"our Algorithm 5": ("o", "-"), "the published code's": ("s", "--")}
+    for (numbers, placement), cells in zero.items():
+        if not cells:
+            continue
+        marker, line = styles[placement]
+        left.errorbar(
+            list(cells), [c[1] for c in cells.values()], yerr=sds_of(list(cells.values())),
+            fmt=marker + line, ms=4, color=colours[numbers], capsize=2, lw=1,
+            label=f"{numbers}, {placement} placement",
+        )  # fmt: skip
+    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
+    left.errorbar(
+        list(published), [c.mean for c in published.values()],
+        yerr=[c.sd for c in published.values()], fmt="D", mfc="white", color="k", ms=5,
+        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
+    )  # fmt: skip
+    left.set_xscale("log")
+    left.set_xlabel("particles (seeds: 11 at 10 and 100, 3 at 1,000, 1-3 at 10,000)")
+    left.set_ylabel("speed toward the light (mm/s), 0 % dead")
+    left.set_title("Speed against size, by placement (2 h, first 30 min left out)", fontsize=10)
+    left.grid(alpha=0.3)
+    left.legend(fontsize=7)
+    packing_csv = out / "packing-10000.csv"
+    if packing_csv.is_file():
+        with packing_csv.open(newline="") as stream:
+            rows = list(csv.DictReader(stream))
+        labelled: set[str] = set()
+        for run in sorted({r["run"] for r in rows}):
+            mine = [r for r in rows if r["run"] == run]
+            first = mine[0]
+            shear, torque = float(first["shear"]), float(first["torque_limit"])
+            numbers = (
+                "published numbers"
+                if (shear, torque) == (PhysicsParams().shear, PhysicsParams().torque_limit)
+                else f"torque limit {torque:g}, shear {shear:g}"
+            )
+            published_code = first["placement"] == "algorithm5-published"
+            colour = colours.get(numbers, "tab:gray")
+            line = "--" if published_code else "-"
+            label = f"{numbers}, {'published code' if published_code else 'our'} placement"
+            if label in labelled:
+                label = "_"  # one legend entry for the seeds of a configuration
+            labelled.add(label)
+            minutes = [float(r["minute"]) for r in mine]
+            middle.plot(minutes, [float(r["inner_packing"]) for r in mine], line, color=colour,
+                        marker=".", label=label)  # fmt: skip
+            right.plot(minutes[1:], [float(r["speed_mm_s_since_last"]) for r in mine[1:]], line,
+                       color=colour, marker=".", label=label)  # fmt: skip
+        middle.set_xlabel("minutes")
+        middle.set_ylabel("packing fraction inside half the RMS radius")
+        middle.set_title("10,000 particles: how densely the middle packs", fontsize=10)
+        middle.grid(alpha=0.3)
+        middle.legend(fontsize=7)
+        right.axhline(paper.TABLE_S3_MM_S[10000][0.0].mean, color="k", lw=0.8, ls=":",
+                      label="paper, minutes 30-120")  # fmt: skip
+        right.axvline(30, color="0.5", lw=0.8, ls="-.", label="left out before this")
+        right.set_xlabel("minutes")
+        right.set_ylabel("speed toward the light over the 10 minutes before (mm/s)")
+        right.set_title("10,000 particles: speed as the run goes", fontsize=10)
+        right.grid(alpha=0.3)
+        right.legend(fontsize=7)
+    else:
+        middle.set_axis_off()
+        right.set_axis_off()
+    fig.suptitle("Table S3's 0 % column with the published code's sparser placement")
+    return [save(fig, out / "placement.png")]
+
+
 def gap_figure(results: Path, out: Path) -> list[Path]:
     ours = gather(results, ("gap-10", "gap-100", "gap-1000"), "success")
     if not ours:
@@ -422,6 +519,7 @@ def main() -> None:
         dead_figures(args.results, args.out)
         + speed_figure(args.results, args.out)
         + shear_figure(args.results, args.out)
+        + placement_figure(args.results, args.out)
         + gap_figure(args.results, args.out)
         + noise_figure(args.results, args.out)
     ):

@@ -439,6 +439,8 @@ def placement_figure(results: Path, out: Path) -> list[Path]:
         right.axhline(paper.TABLE_S3_MM_S[10000][0.0].mean, color="k", lw=0.8, ls=":",
                       label="paper, minutes 30-120")  # fmt: skip
         right.axvline(30, color="0.5", lw=0.8, ls="-.", label="left out before this")
+        bottom, top = right.get_ylim()
+        right.set_ylim(bottom, top + 0.35 * (top - bottom))  # room above the lines for the legend
         right.set_xlabel("minutes")
         right.set_ylabel("speed toward the light over the 10 minutes before (mm/s)")
         right.set_title("10,000 particles: speed as the run goes", fontsize=10)

@@ -25,7 +25,7 @@ class PlacementKind(StrEnum):
     """How the swarm's particles are put down before the run."""
 
     ALGORITHM5 = "algorithm5"
-    """SI Algorithm 5: a random blob grown by tangent placements (the published default)."""
+    """SI Algorithm 5 as its text says: a random blob grown by tangent placements (our default)."""
     ALGORITHM5_PUBLISHED = "algorithm5-published"
     """Algorithm 5 as the published code runs it: coarse pivot steps and, in large swarms, discs
     put down a diameter out, so a sparser blob (placement.algorithm5_published)."""

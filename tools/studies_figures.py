@@ -104,6 +104,16 @@ def band(
     )
 
 
+def paper_zero_column(ax: plt.Axes, marker: str, size: float) -> None:
+    """Table S3's 0 % column (mean +- sd by swarm size) as open markers."""
+    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
+    ax.errorbar(
+        list(published), [c.mean for c in published.values()],
+        yerr=[c.sd for c in published.values()], fmt=marker, mfc="white", color="k", ms=size,
+        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
+    )  # fmt: skip
+
+
 def save(fig: plt.Figure, path: Path, layout: bool = True) -> Path:
     """Writes fig; layout=False keeps a layout the caller made (room for a shared legend)."""
     if layout:
@@ -273,12 +283,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
                 list(zero), [m for _, m, _, _ in zero.values()], yerr=sds_of(list(zero.values())),
                 fmt="o--", ms=3.5, color=colour, capsize=2, lw=1, label=f"ours, {label}",
             )  # fmt: skip
-    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
-    ax.errorbar(
-        list(published), [c.mean for c in published.values()],
-        yerr=[c.sd for c in published.values()], fmt="s", mfc="white", color="k", ms=4.5,
-        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
-    )  # fmt: skip
+    paper_zero_column(ax, "s", 4.5)
     ax.set_xscale("log")
     ax.set_xlabel("particles")
     ax.set_ylabel("speed toward the light (mm/s)")
@@ -393,12 +398,7 @@ def placement_figure(results: Path, out: Path) -> list[Path]:
             fmt=marker + line, ms=4, color=colours[numbers], capsize=2, lw=1,
             label=f"{numbers}, {placement} placement",
         )  # fmt: skip
-    published = {n: row[0.0] for n, row in paper.TABLE_S3_MM_S.items()}
-    left.errorbar(
-        list(published), [c.mean for c in published.values()],
-        yerr=[c.sd for c in published.values()], fmt="D", mfc="white", color="k", ms=5,
-        capsize=3, lw=1, label="paper, Table S3 (11 seeds)",
-    )  # fmt: skip
+    paper_zero_column(left, "D", 5)
     left.set_xscale("log")
     left.set_xlabel("particles (seeds: 11 at 10 and 100, 3 at 1,000, 1-3 at 10,000)")
     left.set_ylabel("speed toward the light (mm/s), 0 % dead")

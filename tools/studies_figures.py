@@ -80,6 +80,15 @@ def gather(results: Path, names: tuple[str, ...], metric: str) -> Cells:
     return ours
 
 
+def zero_cells(results: Path, names: tuple[str, ...]) -> dict[int, tuple[float, float, float, int]]:
+    """The 0 % dead cell (speed) of every size that has one in these study folders, by size."""
+    return {
+        n: cells[0]
+        for n, cells in sorted(gather(results, names, "speed_mm_s").items())
+        if cells and cells[0][0] == 0.0
+    }
+
+
 def count(k: int, noun: str) -> str:
     return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
 
@@ -274,11 +283,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     }  # fmt: skip
     colours = ("tab:purple", "tab:olive", "tab:brown")
     for (label, names), colour in zip(variants.items(), colours, strict=True):
-        zero = {
-            n: cells[0]
-            for n, cells in sorted(gather(results, names, "speed_mm_s").items())
-            if cells and cells[0][0] == 0.0
-        }
+        zero = zero_cells(results, names)
         if zero:
             ax.errorbar(
                 list(zero), [m for _, m, _, _ in zero.values()], yerr=sds_of(list(zero.values())),
@@ -315,10 +320,8 @@ def shear_figure(results: Path, out: Path) -> list[Path]:
     band, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
     by_size: dict[int, list[tuple[float, float, float, int]]] = defaultdict(list)
     for shear, names in SHEAR_SETS.items():
-        for n, cells in gather(results, names, "speed_mm_s").items():
-            if cells and cells[0][0] == 0.0:
-                _, mean, sd, runs = cells[0]
-                by_size[n].append((shear, mean, sd, runs))
+        for n, (_, mean, sd, runs) in zero_cells(results, names).items():
+            by_size[n].append((shear, mean, sd, runs))
     if not by_size:
         return []
     rattle_csv = out / "rattle-shear.csv"
@@ -383,8 +386,7 @@ def placement_figure(results: Path, out: Path) -> list[Path]:
     (tools/swarm_packing.py's CSV in `out`)."""
     zero: dict[tuple[str, str], dict[int, tuple[float, float, float, int]]] = {}
     for key, names in PLACEMENT_SETS.items():
-        cells = {n: c[0] for n, c in sorted(gather(results, names, "speed_mm_s").items())}
-        zero[key] = {n: c for n, c in cells.items() if c[0] == 0.0}
+        zero[key] = zero_cells(results, names)
     if not any(zero.values()):
         return []
     fig, (left, middle, right) = plt.subplots(1, 3, figsize=(16, 4.8), dpi=120)

@@ -7,18 +7,14 @@ import argparse
 import csv
 import math
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from particlebot.analysis.simcsv import read_published_csv
-from particlebot.sim.world.params import PhysicsParams
+from particlebot.sim.scenarios.toml_file import read_scenario
 from particlebot.sim.world.world import Snapshot, World
-
-PUBLISHED = PhysicsParams()
-"""What a scenario without a [physics] table runs with."""
 
 TOUCH_GAP_M = 2e-3
 """Two particles closer than their radii plus this count as touching: a little over the magnets'
@@ -62,8 +58,7 @@ def describe(world: World) -> tuple[float, float, float]:
 def run_rows(folder: Path) -> list[dict[str, object]]:
     """One row per snapshot of a run folder, with the speed toward the lamp (from the CSV's
     distance column) since the snapshot before."""
-    scenario = tomllib.loads((folder / "scenario.toml").read_text())
-    physics = scenario.get("physics", {})
+    scenario = read_scenario(folder / "scenario.toml")
     track = read_published_csv(folder / "run.csv")
     if track.distance_m is None:
         raise ValueError(f"{folder / 'run.csv'} has no Distance column")
@@ -81,9 +76,9 @@ def run_rows(folder: Path) -> list[dict[str, object]]:
             {
                 "run": folder.name,
                 "particles": world.count,
-                "placement": scenario.get("swarm", {}).get("placement", "algorithm5"),
-                "shear": physics.get("shear", PUBLISHED.shear),
-                "torque_limit": physics.get("torque_limit", PUBLISHED.torque_limit),
+                "placement": str(scenario.swarm.placement),
+                "shear": scenario.physics.shear,
+                "torque_limit": scenario.physics.torque_limit,
                 "minute": round(world.t / 60, 3),
                 "inner_packing": round(packing, 4),
                 "touching_neighbours": round(neighbours, 3),

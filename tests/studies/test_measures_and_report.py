@@ -197,6 +197,12 @@ def test_noise_and_gap_reports_check_the_papers_findings() -> None:
     text = markdown(study, options, collect(study, specs, records), {}, "simulator")
     assert "at 1 diameter 0.67 of the noise-free speed (paper 0.67)" in text
     assert "beyond 2 diameters at most 0.00 of it" in text
+    # Without a noise-free run the report says what to add rather than that there is none.
+    study, options, specs, records = records_for(
+        "noise", RawOptions(sizes="100", values="1", seeds="1"), "speed_mm_s", lambda spec: 0.2
+    )
+    text = markdown(study, options, collect(study, specs, records), {}, "simulator")
+    assert "N=100: no noise-free run here to compare against (add 0 to --noise)." in text
     study, options, specs, records = records_for(
         "gap",
         RawOptions(sizes="10,100", values="0.3", seeds="2"),

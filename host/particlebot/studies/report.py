@@ -297,8 +297,13 @@ def _noise_findings(study: Study, stats: Sequence[CellStats]) -> list[str]:
     lines = []
     for n in sorted({n for n, _ in cells}):
         base = cells.get((n, 0.0))
-        if base is None or base.mean <= 0:
-            lines.append(f"N={n:,}: no positive noise-free speed to compare against.")
+        if base is None:
+            # A large swarm's noise-free run is often the dead study's 0 % cell instead.
+            lines.append(f"N={n:,}: no noise-free run here to compare against (add 0 to --noise).")
+            continue
+        if base.mean <= 0:
+            speed = f"{base.mean:.2f} mm/s"
+            lines.append(f"N={n:,}: the noise-free speed is {speed}; nothing to compare against.")
             continue
         parts = []
         one = cells.get((n, 1.0))

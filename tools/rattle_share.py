@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Measures how much of an actuating swarm rattles (moves faster than 0.1 m/s) against the shear."""
+"""Measures how much of an actuating swarm rattles (moves faster than 0.1 m/s) against the contact
+shear and dashpot."""
 
 from __future__ import annotations
 
@@ -21,16 +22,19 @@ radius (4 cm over a 2 s rise) and 4.5 times what sliding friction takes off in a
 2.2 cm/s); the wave itself moves a swarm well under 1 mm/s."""
 
 
-COLUMNS = ("particles", "shear", "torque_limit", "rattling_share", "mean_speed_m_s", "seconds")
+COLUMNS = (
+    "particles", "shear", "torque_limit", "rattling_share", "mean_speed_m_s", "seconds", "damping"
+)  # fmt: skip
 
 
 def measure(
-    count: int, shear: float, torque_limit: float, settle_s: float, window_s: float
-) -> dict[str, float]:
+    count: int, shear: float, torque_limit: float, damping: float, settle_s: float,
+    window_s: float,
+) -> dict[str, float]:  # fmt: skip
     """One Algorithm-5 swarm (seed 1) with the published controller, the lamp 20 m off its
     -x edge: the share of particles faster than FAST_M_S and their mean speed, sampled every
     second over `window_s` after `settle_s`."""
-    params = PhysicsParams(shear=shear, torque_limit=torque_limit)
+    params = PhysicsParams(shear=shear, torque_limit=torque_limit, damping=damping)
     xy = algorithm5(count, params.r_min, np.random.default_rng(1)).xy
     lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
     world = World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
@@ -55,25 +59,27 @@ def main() -> int:
         default=[20, 22.5, 25, 26, 27, 27.5, 28, 28.5, 29, 30, 32.5, 35, 40],
     )  # fmt: skip
     parser.add_argument("--torque-limit", type=float, default=0.7)
+    parser.add_argument("--dampings", type=float, nargs="+", default=[PhysicsParams().damping])
     parser.add_argument("--settle", type=float, default=300.0, help="seconds before sampling")
     parser.add_argument("--window", type=float, default=120.0, help="seconds sampled")
     parser.add_argument("--out", type=Path, default=Path("docs/studies/rattle-shear.csv"))
     args = parser.parse_args()
-    if min(args.sizes) < 3 or min(args.shears) < 0 or args.settle < 0 or args.window < 1:
-        print("rattle_share: needs sizes >= 3, shears >= 0, --settle >= 0, --window >= 1",
-              file=sys.stderr)  # fmt: skip
+    if (min(args.sizes) < 3 or min(args.shears) < 0 or min(args.dampings) < 0
+            or args.settle < 0 or args.window < 1):  # fmt: skip
+        print("rattle_share: needs sizes >= 3, shears and dampings >= 0, --settle >= 0, "
+              "--window >= 1", file=sys.stderr)  # fmt: skip
         return 2
     rows = []
-    cases = [(n, s) for n in args.sizes for s in args.shears]
-    for done, (count, shear) in enumerate(cases, start=1):
+    cases = [(n, s, d) for n in args.sizes for s in args.shears for d in args.dampings]
+    for done, (count, shear, damping) in enumerate(cases, start=1):
         began = time.perf_counter()
-        result = measure(count, shear, args.torque_limit, args.settle, args.window)
+        result = measure(count, shear, args.torque_limit, damping, args.settle, args.window)
         seconds = time.perf_counter() - began
         rows.append({"particles": count, "shear": shear, "torque_limit": args.torque_limit,
-                     **result, "seconds": round(seconds, 1)})  # fmt: skip
+                     **result, "seconds": round(seconds, 1), "damping": damping})  # fmt: skip
         share = 100 * result["rattling_share"]
-        print(f"[{done}/{len(cases)}] {count} particles, shear {shear:g}: {share:.3f} % rattling "
-              f"({seconds:.0f} s)", flush=True)  # fmt: skip
+        print(f"[{done}/{len(cases)}] {count} particles, shear {shear:g}, damping {damping:g}: "
+              f"{share:.3f} % rattling ({seconds:.0f} s)", flush=True)  # fmt: skip
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=COLUMNS)

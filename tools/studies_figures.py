@@ -380,6 +380,65 @@ PLACEMENT_SETS = {
 `--placement published-blob`."""
 
 
+DASHPOT_SETS = {
+    10.0: ("dead-1000", "dead-10000"),
+    12.5: ("damp12.5-1000", "damp12.5-10000"),
+    15.0: ("damp15-1000", "damp15-10000"),
+    17.5: ("damp17.5-1000", "damp17.5-10000"),
+    20.0: ("damp20-1000", "damp20-10000"),
+}
+"""Study folders of the 0 % cells at 1,000 and 10,000 particles with the published numbers but
+the dashpot (`--set damping=D`; 10 is the published value)."""
+
+
+def dashpot_figure(results: Path, out: Path) -> list[Path]:
+    """Speed at 0 % dead against the contact dashpot at 1,000 and 10,000 particles, beside Table
+    S3's bands, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
+    by_size: dict[int, list[tuple[float, float, float, int]]] = defaultdict(list)
+    for damping, names in DASHPOT_SETS.items():
+        for n, (_, mean, sd, runs) in zero_cells(results, names).items():
+            if n in (1000, 10000):
+                by_size[n].append((damping, mean, sd, runs))
+    if not by_size:
+        return []
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), dpi=120)
+    for n, cells in sorted(by_size.items()):
+        colour = COLOURS.get(n, "tab:gray")
+        fewest, most = min(c[3] for c in cells), max(c[3] for c in cells)
+        seeds = f"{fewest}" if fewest == most else f"{fewest}-{most}"
+        left.plot([c[0] for c in cells], [c[1] for c in cells], "o-", ms=4, color=colour,
+                  label=f"{n:,} (seeds a point: {seeds})")  # fmt: skip
+        published = paper.TABLE_S3_MM_S[n][0.0]
+        left.axhspan(published.mean - published.sd, published.mean + published.sd, color=colour,
+                     alpha=0.12, lw=0)  # fmt: skip
+        left.axhline(published.mean, color=colour, lw=0.8, ls=":")
+    left.set_xlabel(f"contact dashpot (1/s; published {PhysicsParams().damping:g}), shear 40")
+    left.set_ylabel("speed toward the light (mm/s), 0 % dead")
+    left.set_title("Ours (points) against Table S3 (shaded: ± 1 sd)", fontsize=10)
+    left.grid(alpha=0.3)
+    left.legend(fontsize=8, title="particles", title_fontsize=8)
+    rattle_csv = out / "rattle-damping.csv"
+    if rattle_csv.is_file():
+        with rattle_csv.open(newline="") as stream:
+            rows = list(csv.DictReader(stream))
+        for n in sorted({int(r["particles"]) for r in rows}):
+            # (a share of 0, none seen, has no place on the log axis: left out)
+            mine = sorted(
+                (float(r["damping"]), float(r["rattling_share"])) for r in rows
+                if int(r["particles"]) == n and float(r["rattling_share"]) > 0
+            )  # fmt: skip
+            right.semilogy([d for d, _ in mine], [100 * v for _, v in mine], "o-", ms=3.5,
+                           color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
+        right.set_xlabel("contact dashpot (1/s), shear 40")
+        right.set_ylabel("particles faster than 0.1 m/s (%)")
+        right.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
+        right.grid(alpha=0.3, which="both")
+        right.legend(fontsize=8, title="particles", title_fontsize=8)
+    else:
+        right.set_axis_off()
+    return [save(fig, out / "dashpot.png")]
+
+
 def placement_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size with our Algorithm 5 and the published code's placement, beside
     Table S3's 0 % column; and how the 10,000-particle swarms pack and move over their runs
@@ -530,6 +589,7 @@ def main() -> None:
         dead_figures(args.results, args.out)
         + speed_figure(args.results, args.out)
         + shear_figure(args.results, args.out)
+        + dashpot_figure(args.results, args.out)
         + placement_figure(args.results, args.out)
         + gap_figure(args.results, args.out)
         + noise_figure(args.results, args.out)

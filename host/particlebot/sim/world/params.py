@@ -62,7 +62,8 @@ class PhysicsParams:
     """DEVIATION: magnets act only across gaps below this (m); beyond it their pull is under
     0.48 N, a ninth of what moves a resting particle. The published code reaches every particle
     in a 5 x 5 block of cells 2 R_max wide (0.47-0.7 m, not isotropic). Measured (README): 0.01,
-    0.05 and 0.6 m give the same speeds toward the light for 10 and 100 particles."""
+    0.05 and 0.6 m give the same speeds toward the light for 10 and 100 particles; 1,000 and
+    10,000 particles go 12-19 % faster uncut, nearly all of it from pulls across 1-5 cm."""
 
     mu: float = 0.4
     """Ground friction coefficient."""

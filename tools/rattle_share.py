@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from particlebot.sim.particles.model.published import PublishedController
-from particlebot.sim.scenarios.placement import algorithm5
+from particlebot.sim.scenarios.placement import algorithm5, algorithm5_published
 from particlebot.sim.world import Lamp, PhysicsParams, World
 
 FAST_M_S = 0.1
@@ -23,19 +23,24 @@ radius (4 cm over a 2 s rise) and 4.5 times what sliding friction takes off in a
 
 
 COLUMNS = (
-    "particles", "shear", "torque_limit", "rattling_share", "mean_speed_m_s", "seconds", "damping"
+    "particles", "shear", "torque_limit", "rattling_share", "mean_speed_m_s", "seconds", "damping",
+    "placement", "settle_s",
 )  # fmt: skip
+
+PLACEMENTS = {"blob": algorithm5, "published-blob": algorithm5_published}
+"""The studies' names (`particlebot study --placement`) for SI Algorithm 5 and the published
+code's sparser version of it."""
 
 
 def measure(
     count: int, shear: float, torque_limit: float, damping: float, settle_s: float,
-    window_s: float,
+    window_s: float, placement: str = "blob",
 ) -> dict[str, float]:  # fmt: skip
-    """One Algorithm-5 swarm (seed 1) with the published controller, the lamp 20 m off its
-    -x edge: the share of particles faster than FAST_M_S and their mean speed, sampled every
-    second over `window_s` after `settle_s`."""
+    """One swarm (seed 1, placed as `placement` names) with the published controller, the lamp
+    20 m off its -x edge: the share of particles faster than FAST_M_S and their mean speed,
+    sampled every second over `window_s` after `settle_s`."""
     params = PhysicsParams(shear=shear, torque_limit=torque_limit, damping=damping)
-    xy = algorithm5(count, params.r_min, np.random.default_rng(1)).xy
+    xy = PLACEMENTS[placement](count, params.r_min, np.random.default_rng(1)).xy
     lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
     world = World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
                   lamp=lamp, seed=1)  # fmt: skip
@@ -60,26 +65,35 @@ def main() -> int:
     )  # fmt: skip
     parser.add_argument("--torque-limit", type=float, default=0.7)
     parser.add_argument("--dampings", type=float, nargs="+", default=[PhysicsParams().damping])
-    parser.add_argument("--settle", type=float, default=300.0, help="seconds before sampling")
+    parser.add_argument("--placements", choices=sorted(PLACEMENTS), nargs="+", default=["blob"])
+    parser.add_argument("--settles", type=float, nargs="+", default=[300.0],
+                        help="seconds before sampling (each a run of its own)")  # fmt: skip
     parser.add_argument("--window", type=float, default=120.0, help="seconds sampled")
     parser.add_argument("--out", type=Path, default=Path("docs/studies/rattle-shear.csv"))
     args = parser.parse_args()
     if (min(args.sizes) < 3 or min(args.shears) < 0 or min(args.dampings) < 0
-            or args.settle < 0 or args.window < 1):  # fmt: skip
-        print("rattle_share: needs sizes >= 3, shears and dampings >= 0, --settle >= 0, "
+            or min(args.settles) < 0 or args.window < 1):  # fmt: skip
+        print("rattle_share: needs sizes >= 3, shears and dampings >= 0, --settles >= 0, "
               "--window >= 1", file=sys.stderr)  # fmt: skip
         return 2
     rows = []
-    cases = [(n, s, d) for n in args.sizes for s in args.shears for d in args.dampings]
-    for done, (count, shear, damping) in enumerate(cases, start=1):
+    cases = [
+        (n, s, d, t, p) for n in args.sizes for s in args.shears for d in args.dampings
+        for t in args.settles for p in args.placements
+    ]  # fmt: skip
+    for done, (count, shear, damping, settle, placement) in enumerate(cases, start=1):
         began = time.perf_counter()
-        result = measure(count, shear, args.torque_limit, damping, args.settle, args.window)
+        result = measure(
+            count, shear, args.torque_limit, damping, settle, args.window, placement
+        )  # fmt: skip
         seconds = time.perf_counter() - began
         rows.append({"particles": count, "shear": shear, "torque_limit": args.torque_limit,
-                     **result, "seconds": round(seconds, 1), "damping": damping})  # fmt: skip
+                     **result, "seconds": round(seconds, 1), "damping": damping,
+                     "placement": placement, "settle_s": settle})  # fmt: skip
         share = 100 * result["rattling_share"]
-        print(f"[{done}/{len(cases)}] {count} particles, shear {shear:g}, damping {damping:g}: "
-              f"{share:.3f} % rattling ({seconds:.0f} s)", flush=True)  # fmt: skip
+        case = f"{count} particles ({placement}), shear {shear:g}, damping {damping:g}, "
+        case += f"after {settle:g} s"
+        print(f"[{done}/{len(cases)}] {case}: {share:.3f} % rattling ({seconds:.0f} s)", flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=COLUMNS)

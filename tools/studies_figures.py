@@ -302,6 +302,29 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     return [save(fig, out / "speed.png")]
 
 
+def rattle_panel(ax: plt.Axes, rattle_csv: Path, swept: str, xlabel: str) -> None:
+    """The share of particles that rattle against the number `swept` (a column of
+    tools/rattle_share.py's CSV), one line per size; the panel is left blank without the CSV."""
+    if not rattle_csv.is_file():
+        ax.set_axis_off()
+        return
+    with rattle_csv.open(newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    for n in sorted({int(r["particles"]) for r in rows}):
+        # (a share of 0, none seen, has no place on the log axis: left out)
+        mine = sorted(
+            (float(r[swept]), float(r["rattling_share"])) for r in rows
+            if int(r["particles"]) == n and float(r["rattling_share"]) > 0
+        )  # fmt: skip
+        ax.semilogy([x for x, _ in mine], [100 * v for _, v in mine], "o-", ms=3.5,
+                    color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("particles faster than 0.1 m/s (%)")
+    ax.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, title="particles", title_fontsize=8)
+
+
 SHEAR_SETS = {
     20.0: ("dead-calm-1000", "dead-calm-10000"),
     25.0: ("dead-mid", "dead-mid-1000", "dead-mid-10000"),
@@ -341,24 +364,7 @@ def shear_figure(results: Path, out: Path) -> list[Path]:
     left.set_title("Ours (points, ± 1 sd) against Table S3 (shaded: ± 1 sd)", fontsize=10)
     left.grid(alpha=0.3)
     left.legend(fontsize=8, title="particles", title_fontsize=8)
-    if rattle_csv.is_file():
-        with rattle_csv.open(newline="") as stream:
-            rows = list(csv.DictReader(stream))
-        for n in sorted({int(r["particles"]) for r in rows}):
-            # (a share of 0, none seen, has no place on the log axis: left out)
-            mine = sorted(
-                (float(r["shear"]), float(r["rattling_share"])) for r in rows
-                if int(r["particles"]) == n and float(r["rattling_share"]) > 0
-            )  # fmt: skip
-            right.semilogy([sh for sh, _ in mine], [100 * v for _, v in mine], "o-", ms=3.5,
-                           color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
-        right.set_xlabel("contact shear (1/s), torque limit 0.7")
-        right.set_ylabel("particles faster than 0.1 m/s (%)")
-        right.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
-        right.grid(alpha=0.3, which="both")
-        right.legend(fontsize=8, title="particles", title_fontsize=8)
-    else:
-        right.set_axis_off()
+    rattle_panel(right, rattle_csv, "shear", "contact shear (1/s), torque limit 0.7")
     fig.suptitle("Table S3's 0 % column against the contact shear (2 h, first 30 min left out)")
     return [save(fig, out / "shear.png")]
 
@@ -416,25 +422,7 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
     left.set_title("Ours (points) against Table S3 (shaded: ± 1 sd)", fontsize=10)
     left.grid(alpha=0.3)
     left.legend(fontsize=8, title="particles", title_fontsize=8)
-    rattle_csv = out / "rattle-damping.csv"
-    if rattle_csv.is_file():
-        with rattle_csv.open(newline="") as stream:
-            rows = list(csv.DictReader(stream))
-        for n in sorted({int(r["particles"]) for r in rows}):
-            # (a share of 0, none seen, has no place on the log axis: left out)
-            mine = sorted(
-                (float(r["damping"]), float(r["rattling_share"])) for r in rows
-                if int(r["particles"]) == n and float(r["rattling_share"]) > 0
-            )  # fmt: skip
-            right.semilogy([d for d, _ in mine], [100 * v for _, v in mine], "o-", ms=3.5,
-                           color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
-        right.set_xlabel("contact dashpot (1/s), shear 40")
-        right.set_ylabel("particles faster than 0.1 m/s (%)")
-        right.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
-        right.grid(alpha=0.3, which="both")
-        right.legend(fontsize=8, title="particles", title_fontsize=8)
-    else:
-        right.set_axis_off()
+    rattle_panel(right, out / "rattle-damping.csv", "damping", "contact dashpot (1/s), shear 40")
     return [save(fig, out / "dashpot.png")]
 
 

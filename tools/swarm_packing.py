@@ -100,7 +100,10 @@ def main() -> None:
             sys.exit(f"swarm_packing: {folder} is not a run folder (no scenario.toml or run.csv)")
         if not any((folder / "snapshots").glob("step-*.npz")):
             sys.exit(f"swarm_packing: {folder} has no snapshots")
-    rows = [row for folder in args.folders for row in run_rows(folder)]
+    try:
+        rows = [row for folder in args.folders for row in run_rows(folder)]
+    except ValueError as exc:  # a run CSV without its Distance column, a scenario it cannot read
+        sys.exit(f"swarm_packing: {exc}")
     with args.out.open("w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=COLUMNS)
         writer.writeheader()

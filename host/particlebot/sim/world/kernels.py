@@ -96,7 +96,15 @@ IntArray = npt.NDArray[np.int64]
 ByteArray = npt.NDArray[np.uint8]
 ListArray = npt.NDArray[np.int32]
 
-# Pair arithmetic may be reassociated and contracted (FMA); nothing in it tests for NaN.
+# Pair arithmetic may be reassociated and contracted (FMA); nothing in it tests for NaN. Only
+# the one-at-a-time pair pass of small swarms (_pairs_each) and the published stale grid use it.
+# The block pair pass of large swarms (_pairs, _pairs_cells and what they call) is plain IEEE
+# arithmetic: with fast-math it came out of a fresh compilation differently optimised than out
+# of numba's cache, so a seeded 3,000-particle swarm took a different path the first time it
+# ran on a machine than every time after (last bits at step 5, metres after 500 steps). Plain
+# arithmetic measured as fast (200,000 particles, boiling: 105-115 ns a particle-step on one
+# thread either way). Small swarms came out the same both ways (500 and 1,500 particles; tests
+# pin their paths). test_compiled_afresh.py guards it.
 _FAST = {"contract", "arcp", "nsz", "reassoc"}
 
 
@@ -430,7 +438,7 @@ PAIR_INPUTS = 6  # its floats: dx, dy, contact distance, dvx, dvy, magnet streng
 PAIR_VALUE_ROWS = PAIR_INPUTS + 5  # then fx, fy, contact, attraction magnitudes, touching (0 / 1)
 
 
-@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy")
 def _pair_forces(
     count: int, dx: FloatArray, dy: FloatArray, c: FloatArray, dvx: FloatArray, dvy: FloatArray,
     strength: FloatArray, law: tuple[float, float, float, float, float, float, float, float],
@@ -459,7 +467,7 @@ def _pair_forces(
         touching[q] = 1.0 if -overlap < touch_gap else 0.0
 
 
-@numba.njit(cache=True, fastmath=_FAST, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy")
 def _pair_block(
     count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
     body: FloatArray, flags: ByteArray, prm: FloatArray,
@@ -506,7 +514,7 @@ def _pair_block(
             _join(i, j, kind_i, flags)
 
 
-@numba.njit(cache=True, inline="always", fastmath=_FAST)
+@numba.njit(cache=True, inline="always")
 def _pick(
     i: int, j: int, xi: float, yi: float, ri: float, cutoff: float, count: int, index: IntArray,
     pos: FloatArray, body: FloatArray,
@@ -523,15 +531,16 @@ def _pick(
     return count + ((d2 < reach * reach) & (d2 != 0.0))
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True)
 def _block_full(
     count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
     body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> int:  # fmt: skip
     """Once a particle's pairs are in (and at least `block`, values' width, of them): evaluates
     the first `block` pairs and moves the rest to the front. Blocks thus always end at the same
-    pairs of a chunk, whichever pass picked them, so that the passes add up the same bits (a
-    pair's bits may depend on where in a block it falls: vector or scalar instructions)."""
+    pairs of a chunk, whichever pass picked them. (Under fast-math a pair's bits depended on
+    where in a block it fell, vector or scalar instructions; the law is plain IEEE arithmetic
+    now, the same either way, and the blocks still end where they did.)"""
     block = values.shape[1]
     if count < block:  # (callers test first: a call per particle costs)
         return count
@@ -542,7 +551,7 @@ def _block_full(
     return count - block
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True)
 def _pick_each(
     i: int, candidates: IntArray, count: int, index: IntArray, values: FloatArray,
     pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
@@ -557,7 +566,7 @@ def _pick_each(
     return count
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True)
 def _pairs(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray, pair_values: FloatArray,
@@ -588,7 +597,7 @@ def _pairs(
     _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True)
 def _pairs_cells(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
     cells: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,

@@ -396,6 +396,23 @@ DASHPOT_SETS = {
 the dashpot (`--set damping=D`; 10 is the published value)."""
 
 
+def spread_factors(path: Path) -> dict[tuple[int, float], float]:
+    """From tools/swarm_start.py's CSV: how many times its starting rms distance from the
+    centroid each swarm (particles, dashpot; published shear and torque limit) ends at."""
+    if not path.is_file():
+        return {}
+    runs: dict[tuple[int, float], list[float]] = defaultdict(list)
+    with path.open(newline="") as stream:
+        for row in csv.DictReader(stream):
+            if float(row["shear"]) == PhysicsParams().shear and (
+                float(row["torque_limit"]) == PhysicsParams().torque_limit
+            ):
+                runs[(int(row["particles"]), float(row["damping"]))].append(
+                    float(row["rms_radius_m"])
+                )
+    return {key: radii[-1] / radii[0] for key, radii in runs.items()}
+
+
 def dashpot_figure(results: Path, out: Path) -> list[Path]:
     """Speed at 0 % dead against the contact dashpot at 1,000 and 10,000 particles, beside Table
     S3's bands, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
@@ -406,6 +423,7 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
                 by_size[n].append((damping, mean, sd, runs))
     if not by_size:
         return []
+    spread = spread_factors(out / "swarm-start.csv")
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), dpi=120)
     for n, cells in sorted(by_size.items()):
         colour = COLOURS.get(n, "tab:gray")
@@ -413,6 +431,12 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
         seeds = f"{fewest}" if fewest == most else f"{fewest}-{most}"
         left.plot([c[0] for c in cells], [c[1] for c in cells], "o-", ms=4, color=colour,
                   label=f"{n:,} (seeds a point: {seeds})")  # fmt: skip
+        for damping, mean, _, _ in cells:
+            factor = spread.get((n, damping), 1.0)
+            if factor > 2:  # the swarm blew apart in its first seconds (tools/swarm_start.py)
+                left.annotate(f"blown apart\n(x{factor:.0f} wider)", (damping, mean),
+                              xytext=(-4, 8), textcoords="offset points", ha="right",
+                              fontsize=7, color=colour)  # fmt: skip
         published = paper.TABLE_S3_MM_S[n][0.0]
         left.axhspan(published.mean - published.sd, published.mean + published.sd, color=colour,
                      alpha=0.12, lw=0)  # fmt: skip

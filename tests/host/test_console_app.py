@@ -16,6 +16,7 @@ from particlebot.console.app import ConfirmScreen, ConsoleApp, PageScreen, heard
 from particlebot.fleet import Fleet, ParticleRecord
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
 from particlebot.swarm.api import Swarm
+from particlebot.swarm.roster import ParticleRow
 from tests.host.fakes import FakeRadio, status_frame, wait_until
 
 
@@ -47,7 +48,14 @@ def hear_particles(
     values: dict[str, int] = {"state": int(State.CYCLING), **fields}
     for particle in ids:
         radio.inject(status_frame(particle, s_n=particle, **values))
-    assert wait_until(lambda: len(app.model.rows()) == len(ids))
+
+    # Until the model holds these very reports: counting rows is not enough when the particles
+    # were heard before (a test that hears them go IDLE then raced the radio's reader).
+    def heard(row: ParticleRow) -> bool:
+        status = row.status
+        return status is not None and all(getattr(status, k) == v for k, v in values.items())
+
+    assert wait_until(lambda: sum(heard(r) for r in app.model.rows() if r.id in ids) == len(ids))
 
 
 def console(pilot: Pilot[int]) -> ConsoleApp:

@@ -32,18 +32,23 @@ PLACEMENTS = {"blob": algorithm5, "published-blob": algorithm5_published}
 code's sparser version of it."""
 
 
+def published_swarm(count: int, params: PhysicsParams, placement: str = "blob") -> World:
+    """The swarm these measurements watch: seed 1, placed as `placement` names, the published
+    controller, the lamp 20 m off its -x edge (tools/swarm_start.py watches the same one)."""
+    xy = PLACEMENTS[placement](count, params.r_min, np.random.default_rng(1)).xy
+    lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
+    return World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
+                 lamp=lamp, seed=1)  # fmt: skip
+
+
 def measure(
     count: int, shear: float, torque_limit: float, damping: float, settle_s: float,
     window_s: float, placement: str = "blob",
 ) -> dict[str, float]:  # fmt: skip
-    """One swarm (seed 1, placed as `placement` names) with the published controller, the lamp
-    20 m off its -x edge: the share of particles faster than FAST_M_S and their mean speed,
+    """One published_swarm: the share of particles faster than FAST_M_S and their mean speed,
     sampled every second over `window_s` after `settle_s`."""
     params = PhysicsParams(shear=shear, torque_limit=torque_limit, damping=damping)
-    xy = PLACEMENTS[placement](count, params.r_min, np.random.default_rng(1)).xy
-    lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
-    world = World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
-                  lamp=lamp, seed=1)  # fmt: skip
+    world = published_swarm(count, params, placement)
     world.run(settle_s)
     shares = []
     speeds = []

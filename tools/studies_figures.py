@@ -62,7 +62,7 @@ PUBLISHED_DEAD = (
     "dead-1000",
     "dead-1000-high",
     "dead-10000-s3",  # the 0 % cell with 3 seeds
-    "dead-10000-all",  # 10-50 % dead, 2 seeds
+    "dead-10000-all",  # 0-80 % dead, 3 seeds (0 % taken from dead-10000-s3, the same runs)
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
 

@@ -12,14 +12,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rattle_share import FAST_M_S, published_swarm  # (tools/, beside this script)
 from scipy.spatial import cKDTree
 
-from particlebot.sim.particles.model.published import PublishedController
-from particlebot.sim.scenarios.placement import algorithm5
-from particlebot.sim.world import Lamp, PhysicsParams, World
+from particlebot.sim.world import PhysicsParams
 
-FAST_M_S = 0.1
-"""Rattling, as tools/rattle_share.py counts it (10 cm a second: 1 mm a step)."""
 TOUCH_M = 0.002
 """Neighbours closer than this gap count as touching (the magnets' blend gap, rounded up)."""
 SAMPLES_S = (0.5, 1, 2, 3, 5, 10, 20, 30, 60, 120, 180, 300, 600)
@@ -45,13 +42,10 @@ def _case(text: str) -> tuple[float, float, float]:
 def timeline(
     count: int, damping: float, shear: float, torque_limit: float, until_s: float
 ) -> list[dict[str, float]]:
-    """One swarm (seed 1, SI Algorithm 5 as the studies place it, the published controller, the
-    lamp 20 m off its -x edge), sampled at SAMPLES_S."""
+    """rattle_share's published_swarm (SI Algorithm 5 as the studies place it), sampled at
+    SAMPLES_S."""
     params = PhysicsParams(damping=damping, shear=shear, torque_limit=torque_limit)
-    xy = algorithm5(count, params.r_min, np.random.default_rng(1)).xy
-    lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
-    world = World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
-                  lamp=lamp, seed=1)  # fmt: skip
+    world = published_swarm(count, params)
     rows = []
     now = 0.0
     for sample in (t for t in SAMPLES_S if t <= until_s):
@@ -126,7 +120,8 @@ def main() -> int:
         default=[(15.0, 40.0, 0.5), (17.5, 40.0, 0.5), (10.0, 27.5, 0.7)],
         help="contact and servo numbers to run (default: 15,40,0.5 17.5,40,0.5 10,27.5,0.7)",
     )  # fmt: skip
-    parser.add_argument("--until", type=float, default=300.0, help="last time sampled (s)")
+    parser.add_argument("--until", type=float, default=300.0,
+                        help="last time sampled (s, up to 600)")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("docs/studies/swarm-start.csv"))
     parser.add_argument("--plot", type=Path, help="also draw the timeline here (PNG)")
     parser.add_argument("--replot", type=Path, metavar="CSV",
@@ -143,8 +138,9 @@ def main() -> int:
             return 1
         print(f"drew {args.plot}")
         return 0
-    if min(args.sizes) < 3 or args.until < SAMPLES_S[0]:
-        print(f"swarm_start: needs sizes >= 3 and --until >= {SAMPLES_S[0]}", file=sys.stderr)
+    if min(args.sizes) < 3 or not SAMPLES_S[0] <= args.until <= SAMPLES_S[-1]:
+        print(f"swarm_start: needs sizes >= 3 and --until from {SAMPLES_S[0]} to {SAMPLES_S[-1]}",
+              file=sys.stderr)  # fmt: skip
         return 2
     rows = []
     for count in args.sizes:

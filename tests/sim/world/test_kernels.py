@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from particlebot.sim.particles.model.published import PublishedController
-from particlebot.sim.world import Lamp, World
+from particlebot.sim.world import Lamp, PhysicsParams, World
 from particlebot.sim.world import kernels as k
 from particlebot.sim.world import world as world_module
 from tests.sim.world.conftest import R_MIN, cluster
@@ -27,9 +27,9 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     assert world._bounds.shape[0] > 2  # parallel chunks
     world.step(20)
     w = world
-    ncx, ncy, cells, start = k._prepare(
+    ncx, ncy, _, start, members = k._prepare(
         w._pos, w._ref, w._vel, w._vel_old, w._body, w._flags, w._ext, w._bounds, w._prm, True,
-        w.threads,
+        w.threads, w._prm[k.P_LIST_RADIUS],
     )  # fmt: skip
     w._flags[k.F_KIND, ::20] = k.FREE  # some to be annexed when they touch the robot
     sums = {}
@@ -38,7 +38,7 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
         values = np.zeros((w._pair_values.shape[0], k.PAIR_VALUE_ROWS, block))
         body, flags = w._body.copy(), w._flags.copy()
         for parity in (0, 1):
-            k._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel_old, body, flags, cells,
+            k._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel_old, body, flags, members,
                                   start, ncx, ncy, index, values, w._prm)  # fmt: skip
         sums[f"grid {block}"] = (body, flags)
         nbr = k._lists_from_ref(w._ref, w._nbr, w._ncount, w._bounds, w._prm)
@@ -56,21 +56,61 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     assert flags[k.F_JOINED].any()  # free particles touching the robot
 
 
+def test_pairs_reached_through_the_grids_order_equal_pairs_after_re_ordering() -> None:
+    # Between re-orderings a boiling swarm's pair pass reaches the particles through the grid's
+    # order (members) wherever they are stored: from any storage order it must add up exactly
+    # what the same particles put in cell order give, particle for particle.
+    x, y = cluster(2500, seed=3, gap=2e-3)
+    rng = np.random.default_rng(3)
+    world = World(x, y, controller=PublishedController(), lamp=Lamp(-4.0, 0.0), seed=3,
+                  velocity=(rng.normal(0, 0.2, x.size), rng.normal(0, 0.2, x.size)))  # fmt: skip
+    assert world._bounds.shape[0] > 2  # parallel chunks
+    world.step(20)
+    w = world
+    shuffle = rng.permutation(x.size)  # stored in no useful order at all
+    sums = {}
+    for sort in (False, True):
+        pos, ref, vel = w._pos[:, shuffle], w._ref[:, shuffle], w._vel[:, shuffle]
+        body, flags, ext = w._body[:, shuffle], w._flags[:, shuffle], w._ext[shuffle]
+        vel_old = vel.copy()  # as the step's first pass leaves them
+        bounds = w._bounds.copy()
+        ncx, ncy, _, start, members = k._prepare(
+            pos, ref, vel, vel_old, body, flags, ext, bounds, w._prm, sort, w.threads,
+            w._prm[k.P_LIST_RADIUS] - w._prm[k.P_SKIN],
+        )  # fmt: skip
+        assert np.array_equal(members, np.arange(x.size)) == sort
+        body[[k.B_FR, k.B_FA, k.B_FX, k.B_FY]] = 0.0  # (the same)
+        for parity in (0, 1):
+            k._pairs_cells_chunks(bounds, parity, pos, vel_old, body, flags, members, start,
+                                  ncx, ncy, w._pair_index, w._pair_values, w._prm)  # fmt: skip
+        by_particle = np.empty_like(body)
+        by_particle[:, ext] = body  # row e: particle e's, wherever it was stored
+        sums[sort] = by_particle
+    assert np.array_equal(sums[False], sums[True])
+    assert (sums[True][k.B_FR] > 0).sum() > 100 and (sums[True][k.B_FA] > 0).sum() > 100
+
+
+@pytest.mark.parametrize("skin", [PhysicsParams.skin, 1e-6])
 def test_the_parallel_path_follows_the_plain_numpy_transcription_too(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, skin: float
 ) -> None:
     # Small swarms run their pairs one at a time; the parallel chunks, the pairs from the grid
     # and the vectorised law are what large swarms run: made to run a small swarm here, they
-    # must follow the numpy transcription of the published step as closely.
+    # must follow the numpy transcription of the published step as closely. A tiny skin
+    # rebuilds the lists at every step, as in a boiling swarm: the particles are re-ordered
+    # only at every SORT_EVERY-th build and reached through the grid's order in between.
     monkeypatch.setattr(world_module, "PARALLEL_FROM", 1)
     x, y = cluster(12, seed=9)
     controller = PublishedController()
-    world = World(x, y, controller=controller, lamp=Lamp(-4.0, 0.5), seed=9)
+    world = World(x, y, controller=controller, lamp=Lamp(-4.0, 0.5), seed=9,
+                  params=PhysicsParams(skin=skin))  # fmt: skip
     assert world._bounds.shape[0] > 2
     worst, reference = lockstep(world, controller, steps=600)
     assert np.abs(world.radii() - reference.r).max() < 1e-9
     assert worst < 1e-9
     assert world.rebuilds > 1 and np.abs(world.state().vx).max() > 0  # and something happened
+    if skin < 1e-3:
+        assert world.rebuilds > 500  # nearly every step (not while all rest)
 
 
 @pytest.mark.parametrize("splits", [1, 2, 3, 7])

@@ -1,9 +1,11 @@
 """The world's compiled inner loops (numba): servo, motion, contacts, magnets, friction, lists.
 
-Memory layout (structure of arrays, rows of 2-D arrays, particles in *internal* order): at every
+Memory layout (structure of arrays, rows of 2-D arrays, particles in *internal* order): at a
 list build the particles are put in grid-cell order (row by row), so that a particle's neighbours
-sit close to it in memory; `ext[i]` is the caller's index of internal slot i. Passive objects
-(few, possibly huge discs) live in their own array and meet every particle directly.
+sit close to it in memory (a large swarm rebuilding at every step does so at every SORT_EVERY-th
+build, and the pair pass reaches them through the grid's order in between); `ext[i]` is the
+caller's index of internal slot i. Passive objects (few, possibly huge discs) live in their own
+array and meet every particle directly.
 
     pos     float64 (2, N)  x, y            ref  float64 (2, N)  x, y at the last list build
     vel     F       (2, N)  vx, vy          vel_old F (2, N)     last step's, for the force pass
@@ -600,20 +602,24 @@ def _pairs(
 @numba.njit(cache=True)
 def _pairs_cells(
     lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
-    cells: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,
+    members: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,
     pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
-    """_pairs straight from the grid a list build has just made (the particles in cell order),
-    for a step that builds the lists: each particle meets the candidates _fill_lists would list,
-    in the same order, so the same pairs within reach (all within the list radius) come in the
-    same order and blocks as from the lists, and the sums are bit for bit the same. The lists
-    themselves are filled later, only if a step needs them (see advance)."""
+    """_pairs straight from a grid a list build has just made, for a step that builds the
+    lists: the particles at cell-order places lo..hi (members[p] is the slot of place p; the
+    identity when the build re-ordered the particles) meet the candidates _fill_lists would
+    list, in the same order, so the same pairs within reach come in the same order and blocks
+    as from the lists, and the sums are bit for bit the same. The lists themselves are filled
+    later, only if a step needs them (see advance)."""
     cutoff = prm[P_CUTOFF]
     block = pair_values.shape[1]
     count = 0
-    for i in range(lo, hi):
-        cx = cells[i] % ncx
-        cy = cells[i] // ncx
+    c = int(np.searchsorted(start, lo, side="right")) - 1  # the cell holding place lo
+    for p in range(lo, hi):
+        while start[c + 1] <= p:
+            c += 1
+        cx = c % ncx
+        cy = c // ncx
         row = cy * ncx
         right = min(cx + 1, ncx - 1)
         end = start[row + right + 1]  # the later ones of its own cell and the cell to its right
@@ -622,19 +628,21 @@ def _pairs_cells(
         if cy + 1 < ncy:
             above_lo = start[row + ncx + max(cx - 1, 0)]
             above_hi = start[row + ncx + right + 1]
-        if end - i - 1 + above_hi - above_lo > block:
-            runs = np.concatenate((np.arange(i + 1, end), np.arange(above_lo, above_hi)))
+        i = members[_slot(p)]
+        if end - p - 1 + above_hi - above_lo > block:
+            runs = np.concatenate((members[p + 1 : end], members[above_lo:above_hi]))
             count = _pick_each(
                 i, runs, count, pair_index, pair_values, pos, vel_old, body, flags, prm
             )
             continue
-        xi = pos[0, i]
-        yi = pos[1, i]
-        ri = body[B_R, i]
-        for j in range(i + 1, end):
-            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
-        for j in range(above_lo, above_hi):
-            count = _pick(i, j, xi, yi, ri, cutoff, count, pair_index, pos, body)
+        u = _slot(i)
+        xi = pos[0, u]
+        yi = pos[1, u]
+        ri = body[B_R, u]
+        for q in range(p + 1, end):
+            count = _pick(i, members[_slot(q)], xi, yi, ri, cutoff, count, pair_index, pos, body)
+        for q in range(above_lo, above_hi):
+            count = _pick(i, members[_slot(q)], xi, yi, ri, cutoff, count, pair_index, pos, body)
         if count >= block:
             count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
     _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
@@ -990,6 +998,16 @@ def _deal(first: int, cells: IntArray, fill: IntArray, members: IntArray) -> Non
         fill[cells[q]] += 1
 
 
+SORT_EVERY = 12
+"""A large swarm that rebuilds its lists at every step (a boiling one) puts its particles in
+cell order at every SORT_EVERY-th build only, and reaches them through the grid's order in
+between: the re-ordering moves every row of every particle, 17 of 60 ns a particle-step on two
+threads at 200,000 particles, while in between the particles stay close to their places. 8-16
+measured alike (a boiling step 20-25 % quicker on two threads, 10-25 % on one; README, "Re-
+ordering at every 12th build"); 32 and 64 lose part of it as the order drifts. (numba compiles
+this value into the kernels and its cache does not see it change: clear the cache when trying
+others.)"""
+
 GRID_PARTS = 4
 """The most parts a list build bins its particles in: each part has a row of counts for every
 cell, and the rows are offset cell by cell in one serial pass, so parts cost memory and serial
@@ -1209,14 +1227,17 @@ def _row_bounds(start: IntArray, ncx: int, ncy: int, bounds: IntArray) -> None:
 def _prepare(
     pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
     flags: ByteArray, ext: IntArray, bounds: IntArray, prm: FloatArray, sort: bool, splits: int,
-) -> tuple[int, int, IntArray, IntArray]:  # fmt: skip
-    """The first half of a list build: grid the particles, put them in grid-cell order when
-    `sort` (every per-particle row and `ext` follow; without it they must already be in that
-    order, as after a restore from the lists' reference positions), make the positions the
-    lists' reference and re-cut the chunk bounds on grid rows. A large swarm (several chunks)
-    does the binning and re-ordering in parts in parallel (`splits`: one per thread; the same
-    result however many). Returns the grid (shape, each particle's cell, the cells' start
-    offsets)."""
+    radius: float,
+) -> tuple[int, int, IntArray, IntArray, IntArray]:  # fmt: skip
+    """The first half of a list build: grid the particles in cells `radius` wide, put them in
+    grid-cell order when `sort` (every per-particle row and `ext` follow), make the positions
+    the lists' reference and re-cut the chunk bounds on grid rows. A large swarm (several
+    chunks) does the binning and re-ordering in parts in parallel (`splits`: one per thread;
+    the same result however many). Returns the grid (shape, each slot's cell, the cells' start
+    offsets in cell order) and each cell-order place's slot: the identity after a re-ordering;
+    without one, the slots in the stable order of the cells (as after a restore from the
+    lists' reference positions, where the particles already are in that order, also the
+    identity)."""
     n = pos.shape[1]
     splits = min(splits, n)
     # A large swarm on several threads bins in up to GRID_PARTS parts and re-orders in one part
@@ -1224,22 +1245,22 @@ def _prepare(
     # re-order 200,000.)
     if bounds.shape[0] > 2 and splits > 1:
         parts = min(splits, GRID_PARTS)
-        ncx, ncy, cells, start, members = _grid_split(pos, prm[P_LIST_RADIUS], parts)
+        ncx, ncy, cells, start, members = _grid_split(pos, radius, parts)
         if sort:
             cells = _reorder_split(members, cells, pos, ref, vel, vel_old, body, flags, ext, splits)
     else:
-        ncx, ncy, cells, start, members = _grid(pos, prm[P_LIST_RADIUS])
+        ncx, ncy, cells, start, members = _grid(pos, radius)
         if sort:
             _reorder(members, pos, ref, vel, vel_old, body, flags, ext)
             for c in range(ncx * ncy):  # the same grid, now in cell order
                 for p in range(start[c], start[c + 1]):
                     cells[p] = c
-    if not sort:
-        for i in range(n):
-            ref[0, i] = pos[0, i]
-            ref[1, i] = pos[1, i]
+    if sort:
+        members = np.arange(n)
+    else:
+        ref[:, :] = pos
     _row_bounds(start, ncx, ncy, bounds)
-    return ncx, ncy, cells, start
+    return ncx, ncy, cells, start, members
 
 
 @numba.njit(cache=True)
@@ -1268,8 +1289,8 @@ def build_lists(
 ) -> ListArray:  # fmt: skip
     """Rebuilds the half neighbour lists from the current positions (see _prepare). Returns the
     lists' array (a wider one if some list did not fit)."""
-    ncx, ncy, cells, start = _prepare(
-        pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits
+    ncx, ncy, cells, start, _ = _prepare(
+        pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits, prm[P_LIST_RADIUS]
     )
     return _fill(pos, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
 
@@ -1316,15 +1337,16 @@ def _pairs_chunks(
 @numba.njit(parallel=True, cache=True)
 def _pairs_cells_chunks(
     bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
-    flags: ByteArray, cells: IntArray, start: IntArray, ncx: int, ncy: int,
+    flags: ByteArray, members: IntArray, start: IntArray, ncx: int, ncy: int,
     pair_index: IntArray, pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
-    """_pairs_cells over the even (parity 0) or odd (1) chunks in parallel, as _pairs_chunks."""
+    """_pairs_cells over the even (parity 0) or odd (1) chunks in parallel, as _pairs_chunks
+    (the bounds are cell-order places)."""
     chunks = bounds.shape[0] - 1
     for half in numba.prange((chunks - parity + 1) // 2):
         c = 2 * half + parity
         _pairs_cells(
-            bounds[c], bounds[c + 1], pos, vel_old, body, flags, cells, start, ncx, ncy,
+            bounds[c], bounds[c + 1], pos, vel_old, body, flags, members, start, ncx, ncy,
             pair_index[c], pair_values[c], prm,
         )  # fmt: skip
 
@@ -1358,10 +1380,10 @@ def _lists_from_ref(
 def advance(
     steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
     vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
-    ncount: npt.NDArray[np.int32], listed: bool, rects: FloatArray, circles: FloatArray,
-    objects: FloatArray, acc: FloatArray, bounds: IntArray, pair_index: IntArray,
-    pair_values: FloatArray, prm: FloatArray, splits: int,
-) -> tuple[ListArray, bool, int]:  # fmt: skip
+    ncount: npt.NDArray[np.int32], listed: bool, unsorted: int, rects: FloatArray,
+    circles: FloatArray, objects: FloatArray, acc: FloatArray, bounds: IntArray,
+    pair_index: IntArray, pair_values: FloatArray, prm: FloatArray, splits: int,
+) -> tuple[ListArray, bool, int, int]:  # fmt: skip
     """Runs `steps` steps; step s commands the radii targets[s, ext[i]] (NaN: hold). With one
     chunk everything runs inline (no parallel region to start), with several in parallel.
     pair_index and pair_values are the pair pass's scratch, one (rows, block) per chunk.
@@ -1369,12 +1391,17 @@ def advance(
     With several chunks, a step that rebuilds the lists takes its pairs straight from the new
     grid (_pairs_cells) and leaves the lists unfilled (`listed` False); the next step that keeps
     them fills them from the build's positions first. A boiling swarm, rebuilding every step,
-    never fills a list. One chunk (a small swarm) runs its pairs one at a time (_pairs_each).
+    never fills a list. Such a build re-orders the particles (cell order) only at every
+    SORT_EVERY-th build in a row; in between (`unsorted`: the builds since the last
+    re-ordering) the pairs reach the particles through the grid's order, and a step that would
+    keep lists built that way rebuilds them with a re-ordering instead. One chunk (a small
+    swarm) runs its pairs one at a time (_pairs_each) and re-orders at every build.
     Returns the neighbour lists' array (possibly a new, wider one), whether it holds the last
-    build's lists, and how many times the lists were rebuilt."""
+    build's lists, `unsorted`, and how many times the lists were rebuilt."""
     n = pos.shape[1]
     inline = bounds.shape[0] == 2
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
+    reach = prm[P_LIST_RADIUS] - prm[P_SKIN]  # an unsorted build's grid (no lists, no skin)
     rebuilds = 0
     for s in range(steps):
         if inline:
@@ -1392,15 +1419,18 @@ def advance(
                 )  # fmt: skip
                 rebuilds += 1
             _pairs_each(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
-        elif moved > limit:
-            ncx, ncy, cells, start = _prepare(
-                pos, ref, vel, vel_old, body, flags, ext, bounds, prm, True, splits
-            )
+        elif moved > limit or unsorted > 0:
+            sort = moved <= limit or unsorted + 1 >= SORT_EVERY
+            ncx, ncy, _, start, members = _prepare(
+                pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits,
+                prm[P_LIST_RADIUS] if sort else reach,
+            )  # fmt: skip
+            unsorted = 0 if sort else unsorted + 1
             rebuilds += 1
             listed = False
             for parity in (0, 1):
                 _pairs_cells_chunks(
-                    bounds, parity, pos, vel_old, body, flags, cells, start, ncx, ncy,
+                    bounds, parity, pos, vel_old, body, flags, members, start, ncx, ncy,
                     pair_index, pair_values, prm,
                 )  # fmt: skip
         else:
@@ -1418,4 +1448,4 @@ def advance(
             _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)
-    return nbr, listed, rebuilds
+    return nbr, listed, unsorted, rebuilds

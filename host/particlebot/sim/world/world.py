@@ -237,6 +237,7 @@ class World:
         self._nbr = np.zeros((n, max(width, 8)), dtype=np.int32)
         self._ncount = np.zeros(n, dtype=np.int32)
         self._listed = True  # whether _nbr holds the last build's lists (see kernels.advance)
+        self._unsorted = 0  # list builds since the particles were last put in cell order (same)
         rows = max(1, min(TARGET_BUDGET // n, 8192))
         self._targets = np.full((rows, n), np.nan)
         self._observers: list[_Observation] = []
@@ -360,11 +361,11 @@ class World:
                     -self.params.half_width, 2 * self.params.r_max, self._prm,
                 )  # fmt: skip
             else:
-                self._nbr, self._listed, rebuilds = k.advance(
+                self._nbr, self._listed, self._unsorted, rebuilds = k.advance(
                     rows, self._targets, self._ext, self._pos, self._ref, self._vel,
                     self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._listed,
-                    self._rects, self._circles, self._objects, self._acc, self._bounds,
-                    self._pair_index, self._pair_values, self._prm, self.threads,
+                    self._unsorted, self._rects, self._circles, self._objects, self._acc,
+                    self._bounds, self._pair_index, self._pair_values, self._prm, self.threads,
                 )  # fmt: skip
             self.rebuilds += rebuilds
             self._steps += rows
@@ -406,6 +407,7 @@ class World:
             self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._listed = True
+        self._unsorted = 0
         if self._stale:
             # The rebuild re-ordered the particles the listing refers to: list them again.
             k.stale_list(
@@ -476,6 +478,7 @@ class World:
             "precision": self.precision,
             "steps": self._steps,
             "dead_done": self._dead_done,
+            "unsorted": self._unsorted,
             "rng": self._rng.bit_generator.state,
             "controller": self.controller,
         }
@@ -521,11 +524,22 @@ class World:
         world._objects = a["objects"].copy()
         world._setup_derived(world._pos.shape[1])
         # The lists exactly as they were: built from the reference positions, in the same order.
-        world._nbr = k.build_lists(
-            world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
-            world._flags, world._ext, world._nbr, world._ncount, world._bounds, world._prm,
-            False, world.threads,
-        )  # fmt: skip
+        # Particles not in that order since the last build (see kernels.advance) had no lists
+        # to keep: the grid alone gives the chunks their bounds.
+        world._unsorted = s.get("unsorted", 0)
+        if world._unsorted:
+            k._prepare(
+                world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
+                world._flags, world._ext, world._bounds, world._prm, False, world.threads,
+                world.params.list_radius - world.params.skin,
+            )  # fmt: skip
+            world._listed = False
+        else:
+            world._nbr = k.build_lists(
+                world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
+                world._flags, world._ext, world._nbr, world._ncount, world._bounds, world._prm,
+                False, world.threads,
+            )  # fmt: skip
         if world._stale and "stale_hashes" in a:
             world._stale_hashes = a["stale_hashes"].copy()
             k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)

@@ -61,8 +61,8 @@ PUBLISHED_DEAD = (
     "dead-high",
     "dead-1000",
     "dead-1000-high",
-    "dead-10000-s3",  # the 0 % cell with 3 seeds
-    "dead-10000-all",  # 0-80 % dead, 3 seeds (0 % taken from dead-10000-s3, the same runs)
+    "dead-10000-all",  # 0-80 % dead, 3 seeds, 4 at 0 and 10 % (dead-10000-s3's runs and more)
+    "dead-10000-s3",  # the 0 % cell with 3 seeds (the same runs as above, bar the fourth)
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
 
@@ -142,14 +142,15 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         x = [100 * f for f, *_ in cells]
         base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
         means = [m for _, m, _, _ in cells]
-        runs = min(r for *_, r in cells)
+        fewest, most = min(r for *_, r in cells), max(r for *_, r in cells)
+        seeds = count(fewest, "seed") if fewest == most else f"{fewest}-{most} seeds"
         band(
             absolute,
             x,
             means,
             sds_of(cells),
             colour,
-            f"{n:,} ours ({count(runs, 'seed')})",
+            f"{n:,} ours ({seeds})",
             alpha=0.18,
         )
         relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")
@@ -249,7 +250,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
     sizes it did not run, beside Table S3's 0 % column."""
     points: dict[int, tuple[float, float, int]] = {}
-    for name in ("dead-1000", "dead-10000", "dead-10000-s3", "speed-small"):
+    for name in ("dead-1000", "dead-10000", "dead-10000-s3", "dead-10000-all", "speed-small"):
         for n, cells in read(results / name, "speed_mm_s").items():
             for value, mean, sd, runs in cells:
                 if value == 0.0:

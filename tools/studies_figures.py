@@ -143,14 +143,14 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
         means = [m for _, m, _, _ in cells]
         fewest, most = min(r for *_, r in cells), max(r for *_, r in cells)
-        seeds = count(fewest, "seed") if fewest == most else f"{fewest}-{most} seeds"
+        runs_text = count(fewest, "seed") if fewest == most else f"{fewest}-{most} seeds"
         band(
             absolute,
             x,
             means,
             sds_of(cells),
             colour,
-            f"{n:,} ours ({seeds})",
+            f"{n:,} ours ({runs_text})",
             alpha=0.18,
         )
         relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")

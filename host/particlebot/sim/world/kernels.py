@@ -1379,6 +1379,35 @@ def _settle_chunks(
         )  # fmt: skip
 
 
+@numba.njit(cache=True, inline="always")
+def _unsorted_radius(prm: FloatArray) -> float:
+    """The cell width of a build that does not re-order (see advance): it fills no lists, so
+    its cells need only the reach of a pair (2 r_max + cutoff), not the skin."""
+    return prm[P_LIST_RADIUS] - prm[P_SKIN]
+
+
+@numba.njit(cache=True)
+def restore_lists(
+    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32], bounds: IntArray,
+    prm: FloatArray, unsorted: int, splits: int,
+) -> tuple[ListArray, bool]:  # fmt: skip
+    """A restored world's last build as it was, from the positions it was made at (ref): after
+    a re-ordering, its lists (the particles are in its order); `unsorted` builds later, only its
+    grid's chunk bounds (such a build had no lists). Returns the lists' array and whether it
+    holds them (advance's `listed`)."""
+    if unsorted:
+        _prepare(
+            ref.copy(), ref, vel, vel_old, body, flags, ext, bounds, prm, False, splits,
+            _unsorted_radius(prm),
+        )  # fmt: skip
+        return nbr, False
+    nbr = build_lists(
+        ref.copy(), ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, False, splits
+    )
+    return nbr, True
+
+
 @numba.njit(cache=True)
 def _lists_from_ref(
     ref: FloatArray, nbr: ListArray, ncount: npt.NDArray[np.int32], bounds: IntArray,
@@ -1415,7 +1444,6 @@ def advance(
     n = pos.shape[1]
     inline = bounds.shape[0] == 2
     limit = 0.25 * prm[P_SKIN] * prm[P_SKIN]  # (skin / 2)^2
-    reach = prm[P_LIST_RADIUS] - prm[P_SKIN]  # an unsorted build's grid (no lists, no skin)
     rebuilds = 0
     here = np.empty(n, dtype=targets.dtype)  # a step's commanded radii in slot order
     for s in range(steps):
@@ -1439,7 +1467,7 @@ def advance(
             sort = moved <= limit or unsorted + 1 >= SORT_EVERY
             ncx, ncy, _, start, members = _prepare(
                 pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits,
-                prm[P_LIST_RADIUS] if sort else reach,
+                prm[P_LIST_RADIUS] if sort else _unsorted_radius(prm),
             )  # fmt: skip
             unsorted = 0 if sort else unsorted + 1
             rebuilds += 1

@@ -523,23 +523,12 @@ class World:
         world._ext = a["ext"].copy()
         world._objects = a["objects"].copy()
         world._setup_derived(world._pos.shape[1])
-        # The lists exactly as they were: built from the reference positions, in the same order.
-        # Particles not in that order since the last build (see kernels.advance) had no lists
-        # to keep: the grid alone gives the chunks their bounds.
+        # The last build exactly as it was, from the reference positions.
         world._unsorted = s.get("unsorted", 0)
-        if world._unsorted:
-            k._prepare(
-                world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
-                world._flags, world._ext, world._bounds, world._prm, False, world.threads,
-                world.params.list_radius - world.params.skin,
-            )  # fmt: skip
-            world._listed = False
-        else:
-            world._nbr = k.build_lists(
-                world._ref.copy(), world._ref, world._vel, world._vel_old, world._body,
-                world._flags, world._ext, world._nbr, world._ncount, world._bounds, world._prm,
-                False, world.threads,
-            )  # fmt: skip
+        world._nbr, world._listed = k.restore_lists(
+            world._ref, world._vel, world._vel_old, world._body, world._flags, world._ext,
+            world._nbr, world._ncount, world._bounds, world._prm, world._unsorted, world.threads,
+        )  # fmt: skip
         if world._stale and "stale_hashes" in a:
             world._stale_hashes = a["stale_hashes"].copy()
             k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)

@@ -61,8 +61,7 @@ PUBLISHED_DEAD = (
     "dead-high",
     "dead-1000",
     "dead-1000-high",
-    "dead-10000-all",  # 0-80 % dead, 3 seeds, 4 at 0 and 10 % (dead-10000-s3's runs and more)
-    "dead-10000-s3",  # the 0 % cell with 3 seeds (the same runs as above, bar the fourth)
+    "dead-10000-all",  # 0-80 % dead, 3-5 seeds (holds the older dead-10000-s3's runs too)
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
 
@@ -90,6 +89,12 @@ def zero_cells(results: Path, names: tuple[str, ...]) -> dict[int, tuple[float, 
 
 def count(k: int, noun: str) -> str:
     return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
+
+
+def seeds_text(runs: list[int]) -> str:
+    """How many seeds cells of these run counts have: '3 seeds', or '3-5 seeds' when they differ."""
+    lo, hi = min(runs), max(runs)
+    return count(lo, "seed") if lo == hi else f"{lo}-{hi} seeds"
 
 
 def sds_of(cells: list[tuple[float, float, float, int]], scale: float = 1.0) -> list[float]:
@@ -142,15 +147,13 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
         x = [100 * f for f, *_ in cells]
         base = next((m for f, m, _, _ in cells if f == 0.0), math.nan)
         means = [m for _, m, _, _ in cells]
-        fewest, most = min(r for *_, r in cells), max(r for *_, r in cells)
-        runs_text = count(fewest, "seed") if fewest == most else f"{fewest}-{most} seeds"
         band(
             absolute,
             x,
             means,
             sds_of(cells),
             colour,
-            f"{n:,} ours ({runs_text})",
+            f"{n:,} ours ({seeds_text([r for *_, r in cells])})",
             alpha=0.18,
         )
         relative.plot(x, [m / base for m in means], "o-", color=colour, ms=3.5, label=f"{n:,} ours")
@@ -226,9 +229,7 @@ def dead_figures(results: Path, out: Path) -> list[Path]:
                     yerr=sds_of(row), fmt="o-", ms=3.5, color=f"C{index}",
                     capsize=2, lw=1,
                 )  # fmt: skip
-            lo, hi = min(seeds), max(seeds)
-            seeds_text = count(lo, "seed") if lo == hi else f"{lo}-{hi} seeds"
-            ax.set_title(f"{n:,} particles ({seeds_text} a cell)", fontsize=10)
+            ax.set_title(f"{n:,} particles ({seeds_text(seeds)} a cell)", fontsize=10)
             ax.set_xlabel("dead particles (%)")
             ax.set_ylabel("speed toward the light (mm/s)")
             ax.axhline(0.0, color="0.6", lw=0.8, zorder=0)
@@ -250,7 +251,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size: the speed study's cells, and the dead study's 0 % cells of
     sizes it did not run, beside Table S3's 0 % column."""
     points: dict[int, tuple[float, float, int]] = {}
-    for name in ("dead-1000", "dead-10000", "dead-10000-s3", "dead-10000-all", "speed-small"):
+    for name in ("dead-1000", "dead-10000", "dead-10000-all", "speed-small"):
         for n, cells in read(results / name, "speed_mm_s").items():
             for value, mean, sd, runs in cells:
                 if value == 0.0:
@@ -371,7 +372,7 @@ def shear_figure(results: Path, out: Path) -> list[Path]:
 
 
 PLACEMENT_SETS = {
-    ("published numbers", "our Algorithm 5"): ("dead-small", "dead-1000", "dead-10000-s3"),
+    ("published numbers", "our Algorithm 5"): ("dead-small", "dead-1000", "dead-10000-all"),
     ("published numbers", "the published code's"): (
         "place-pub-small", "place-pub-1000", "place-pub-10000",
     ),
@@ -474,7 +475,15 @@ def placement_figure(results: Path, out: Path) -> list[Path]:
         )  # fmt: skip
     paper_zero_column(left, "D", 5)
     left.set_xscale("log")
-    left.set_xlabel("particles (seeds: 11 at 10 and 100, 3 at 1,000, 1-3 at 10,000)")
+    runs: dict[int, list[int]] = defaultdict(list)
+    for cells in zero.values():
+        for n, cell in cells.items():
+            runs[n].append(cell[3])
+    per_size = ", ".join(
+        f"{min(r)}-{max(r)} at {n:,}" if min(r) < max(r) else f"{min(r)} at {n:,}"
+        for n, r in sorted(runs.items())
+    )
+    left.set_xlabel(f"particles\n(seeds a point: {per_size})")
     left.set_ylabel("speed toward the light (mm/s), 0 % dead")
     left.set_title("Speed against size, by placement (2 h, first 30 min left out)", fontsize=10)
     left.grid(alpha=0.3)

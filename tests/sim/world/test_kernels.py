@@ -28,8 +28,8 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     world.step(20)
     w = world
     ncx, ncy, _, start, members = k._prepare(
-        w._pos, w._ref, w._vel, w._vel_old, w._body, w._flags, w._ext, w._bounds, w._prm, True,
-        w.threads, w._prm[k.P_LIST_RADIUS],
+        w._pos, w._ref, w._vel, w._body, w._flags, w._ext, w._bounds, w._prm, True, w.threads,
+        w._prm[k.P_LIST_RADIUS],
     )  # fmt: skip
     w._flags[k.F_KIND, ::20] = k.FREE  # some to be annexed when they touch the robot
     sums = {}
@@ -38,13 +38,13 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
         values = np.zeros((w._pair_values.shape[0], k.PAIR_VALUE_ROWS, block))
         body, flags = w._body.copy(), w._flags.copy()
         for parity in (0, 1):
-            k._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel_old, body, flags, members,
+            k._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel, body, flags, members,
                                   start, ncx, ncy, index, values, w._prm)  # fmt: skip
         sums[f"grid {block}"] = (body, flags)
         nbr = k._lists_from_ref(w._ref, w._nbr, w._ncount, w._bounds, w._prm)
         body, flags = w._body.copy(), w._flags.copy()
         for parity in (0, 1):
-            k._pairs_chunks(w._bounds, parity, w._pos, w._vel_old, body, flags, nbr, w._ncount,
+            k._pairs_chunks(w._bounds, parity, w._pos, w._vel, body, flags, nbr, w._ncount,
                             index, values, w._prm)  # fmt: skip
         sums[f"lists {block}"] = (body, flags)
     for block in (k.PAIR_BLOCK, 37):
@@ -72,16 +72,15 @@ def test_pairs_reached_through_the_grids_order_equal_pairs_after_re_ordering() -
     for sort in (False, True):
         pos, ref, vel = w._pos[:, shuffle], w._ref[:, shuffle], w._vel[:, shuffle]
         body, flags, ext = w._body[:, shuffle], w._flags[:, shuffle], w._ext[shuffle]
-        vel_old = vel.copy()  # as the step's first pass leaves them
         bounds = w._bounds.copy()
         ncx, ncy, _, start, members = k._prepare(
-            pos, ref, vel, vel_old, body, flags, ext, bounds, w._prm, sort, w.threads,
+            pos, ref, vel, body, flags, ext, bounds, w._prm, sort, w.threads,
             w._prm[k.P_LIST_RADIUS] - w._prm[k.P_SKIN],
         )  # fmt: skip
         assert np.array_equal(members, np.arange(x.size)) == sort
         body[[k.B_FR, k.B_FA, k.B_FX, k.B_FY]] = 0.0  # (the same)
         for parity in (0, 1):
-            k._pairs_cells_chunks(bounds, parity, pos, vel_old, body, flags, members, start,
+            k._pairs_cells_chunks(bounds, parity, pos, vel, body, flags, members, start,
                                   ncx, ncy, w._pair_index, w._pair_values, w._prm)  # fmt: skip
         by_particle = np.empty_like(body)
         by_particle[:, ext] = body  # row e: particle e's, wherever it was stored
@@ -131,16 +130,14 @@ def test_binning_and_reordering_in_parts_equal_the_serial_passes(splits: int) ->
     order = serial[4]
     assert not np.array_equal(order, np.arange(n))
 
-    # Rows with values that tell slots apart: pos, ref, vel, vel_old, body, flags, ext.
+    # Rows with values that tell slots apart: pos, ref, vel, body, flags, ext.
     vel = rng.normal(size=(2, n))
     body = rng.normal(size=(k.BODY_ROWS, n))
     flags = rng.integers(0, 255, (k.FLAG_ROWS, n), np.uint8)
     ext = rng.permutation(n).astype(np.int64)
-    plain = (pos.copy(), np.zeros((2, n)), vel.copy(), np.zeros((2, n)), body.copy(),
-             flags.copy(), ext.copy())  # fmt: skip
+    plain = (pos.copy(), np.zeros((2, n)), vel.copy(), body.copy(), flags.copy(), ext.copy())
     k._reorder(order, *plain)
-    split = (pos.copy(), np.zeros((2, n)), vel.copy(), np.zeros((2, n)), body.copy(),
-             flags.copy(), ext.copy())  # fmt: skip
+    split = (pos.copy(), np.zeros((2, n)), vel.copy(), body.copy(), flags.copy(), ext.copy())
     cells = k._reorder_split(order, serial[2], *split, splits)
     for a, b in zip(plain, split, strict=True):
         if a.shape[0] == k.BODY_ROWS:  # the force rows are a step's own: not carried

@@ -8,9 +8,12 @@ caller's index of internal slot i. Passive objects (few, possibly huge discs) li
 array and meet every particle directly.
 
     pos     float64 (2, N)  x, y            ref  float64 (2, N)  x, y at the last list build
-    vel     F       (2, N)  vx, vy          vel_old F (2, N)     last step's, for the force pass
+    vel     F       (2, N)  vx, vy (the force passes read it as the step's old velocity;
+                            only the last pass writes it)
     body    F       (6, N)  r, contact-force sum, attraction sum, magnet factor (1, or 0 once
-                            detached), force x, force y (the last two only inside a step)
+                            detached), force x, force y (the last two a step's own: zero
+                            between steps; the pair passes add into them, the last pass reads
+                            and clears them)
     flags   uint8   (5, N)  kind (MEMBER / FREE / DETACHED), acting, joined, alive, held
     nbr     int32   (N, M)  half neighbour lists: j > i within the list radius, counts in ncount
 
@@ -296,11 +299,13 @@ def _targets_here(lo: int, hi: int, row: FloatArray, ext: IntArray, here: FloatA
 @numba.njit(cache=True)
 def _kinematics(
     lo: int, hi: int, here: FloatArray, pos: FloatArray, ref: FloatArray, vel: FloatArray,
-    vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+    body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> float:  # fmt: skip
     """First pass: joins from the last step take effect, the servo moves the radius toward
     here[i] (from the last step's force sums, which are then cleared), positions advance by the
-    old velocity, walls reflect, and the velocity is kept in vel_old for the force passes.
+    old velocity and walls reflect. The velocity stays as it is until the last pass (the force
+    passes read it as the step's old velocity), and the force rows are zero (the last pass
+    cleared them, as it read them: here their cache lines would be fetched only to be zeroed).
     Returns the largest squared displacement since the last list build."""
     dt = prm[P_DT]
     wall = prm[P_HALF_WIDTH]
@@ -319,8 +324,6 @@ def _kinematics(
                 body[B_R, i] = r
         body[B_FR, i] = 0.0
         body[B_FA, i] = 0.0
-        body[B_FX, i] = 0.0
-        body[B_FY, i] = 0.0
         x = pos[0, i] + vel[0, i] * dt
         y = pos[1, i] + vel[1, i] * dt
         if x > wall - r:
@@ -337,8 +340,6 @@ def _kinematics(
             vel[1, i] = -vel[1, i]
         pos[0, i] = x
         pos[1, i] = y
-        vel_old[0, i] = vel[0, i]
-        vel_old[1, i] = vel[1, i]
         dx = x - ref[0, i]
         dy = y - ref[1, i]
         worst = max(worst, dx * dx + dy * dy)
@@ -348,7 +349,7 @@ def _kinematics(
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _law(
     j: int, dx: float, dy: float, d2: float, c: float, vxi: float, vyi: float, magi: float,
-    vel_old: FloatArray, body: FloatArray, prm: FloatArray,
+    vel: FloatArray, body: FloatArray, prm: FloatArray,
 ) -> tuple[float, float, float, float, bool]:  # fmt: skip
     """Force on i from j (rel = pj - pi at squared distance d2 > 0, contact distance c), for a
     pair within reach: contact (spring, dashpot, shear) when they overlap, else the magnets.
@@ -358,9 +359,7 @@ def _law(
     nx = dx / d
     ny = dy / d
     if d < c:
-        px, py = _contact(
-            nx, ny, c - d, prm[P_SPRING], vel_old[0, j] - vxi, vel_old[1, j] - vyi, prm
-        )
+        px, py = _contact(nx, ny, c - d, prm[P_SPRING], vel[0, j] - vxi, vel[1, j] - vyi, prm)
         return px, py, math.sqrt(px * px + py * py), 0.0, True
     strength = magi * body[B_MAG, j]
     if strength > 0.0:
@@ -382,7 +381,7 @@ def _join(i: int, j: int, kind_i: int, flags: ByteArray) -> None:
 @numba.njit(cache=True, inline="always", fastmath=_FAST)
 def _pair(
     i: int, j: int, dx: float, dy: float, d2: float, vxi: float, vyi: float, ri: float,
-    magi: float, kind_i: int, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    magi: float, kind_i: int, vel: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
 ) -> tuple[float, float, float, float]:  # fmt: skip
     """One listed pair (j > i, rel = pj - pi) within the cutoff: j gets -f and |f| in its sum
@@ -391,7 +390,7 @@ def _pair(
     reach = c + prm[P_CUTOFF]
     if d2 >= reach * reach or d2 == 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    px, py, contact, attract, touching = _law(j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm)
+    px, py, contact, attract, touching = _law(j, dx, dy, d2, c, vxi, vyi, magi, vel, body, prm)
     body[B_FR, j] += contact
     body[B_FA, j] += attract
     body[B_FX, j] -= px
@@ -403,7 +402,7 @@ def _pair(
 
 @numba.njit(cache=True, fastmath=_FAST)
 def _pairs_each(
-    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    lo: int, hi: int, pos: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     nbr: ListArray, ncount: npt.NDArray[np.int32], prm: FloatArray,
 ) -> None:  # fmt: skip
     """Second pass, one pair at a time, for small swarms (one inline chunk): every listed pair
@@ -414,8 +413,8 @@ def _pairs_each(
         i = _slot(signed)
         xi = pos[0, i]
         yi = pos[1, i]
-        vxi = vel_old[0, i]
-        vyi = vel_old[1, i]
+        vxi = vel[0, i]
+        vyi = vel[1, i]
         ri = body[B_R, i]
         magi = body[B_MAG, i]
         kind_i = flags[F_KIND, i]
@@ -428,7 +427,7 @@ def _pairs_each(
             dx = pos[0, j] - xi
             dy = pos[1, j] - yi
             px, py, contact, attract = _pair(
-                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel_old, body,
+                i, j, dx, dy, dx * dx + dy * dy, vxi, vyi, ri, magi, kind_i, vel, body,
                 flags, prm,
             )  # fmt: skip
             fx += px
@@ -481,7 +480,7 @@ def _pair_forces(
 
 @numba.njit(cache=True, error_model="numpy")
 def _pair_block(
-    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel: FloatArray,
     body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> None:  # fmt: skip
     """Evaluates the `count` gathered pairs (i = index[1, q], j = index[0, q]) and adds them up
@@ -495,8 +494,8 @@ def _pair_block(
         inputs[0, q] = pos[0, j] - pos[0, i]
         inputs[1, q] = pos[1, j] - pos[1, i]
         inputs[2, q] = body[B_R, i] + body[B_R, j]
-        inputs[3, q] = vel_old[0, j] - vel_old[0, i]
-        inputs[4, q] = vel_old[1, j] - vel_old[1, i]
+        inputs[3, q] = vel[0, j] - vel[0, i]
+        inputs[4, q] = vel[1, j] - vel[1, i]
         inputs[5, q] = body[B_MAG, i] * body[B_MAG, j]
     law = (
         prm[P_SPRING], prm[P_DAMPING], prm[P_SHEAR], prm[P_CLAMP_FORCE], prm[P_CLAMP_GAP],
@@ -545,7 +544,7 @@ def _pick(
 
 @numba.njit(cache=True)
 def _block_full(
-    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel_old: FloatArray,
+    count: int, index: IntArray, values: FloatArray, pos: FloatArray, vel: FloatArray,
     body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> int:  # fmt: skip
     """Once a particle's pairs are in (and at least `block`, values' width, of them): evaluates
@@ -556,7 +555,7 @@ def _block_full(
     block = values.shape[1]
     if count < block:  # (callers test first: a call per particle costs)
         return count
-    _pair_block(block, index, values, pos, vel_old, body, flags, prm)
+    _pair_block(block, index, values, pos, vel, body, flags, prm)
     for q in range(block, count):
         index[0, q - block] = index[0, q]
         index[1, q - block] = index[1, q]
@@ -566,7 +565,7 @@ def _block_full(
 @numba.njit(cache=True)
 def _pick_each(
     i: int, candidates: IntArray, count: int, index: IntArray, values: FloatArray,
-    pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
+    pos: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray, prm: FloatArray,
 ) -> int:  # fmt: skip
     """_pick for more candidates than a block holds (never in a real swarm: a thousand
     particles within the list radius), evaluating a block whenever one is full."""
@@ -574,13 +573,13 @@ def _pick_each(
         count = _pick(
             i, j, pos[0, i], pos[1, i], body[B_R, i], prm[P_CUTOFF], count, index, pos, body
         )
-        count = _block_full(count, index, values, pos, vel_old, body, flags, prm)
+        count = _block_full(count, index, values, pos, vel, body, flags, prm)
     return count
 
 
 @numba.njit(cache=True)
 def _pairs(
-    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    lo: int, hi: int, pos: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray, pair_values: FloatArray,
     prm: FloatArray,
 ) -> None:  # fmt: skip
@@ -596,7 +595,7 @@ def _pairs(
         if ncount[i] > block:
             count = _pick_each(
                 i, nbr[i, : ncount[i]].astype(np.int64), count, pair_index, pair_values, pos,
-                vel_old, body, flags, prm,
+                vel, body, flags, prm,
             )  # fmt: skip
             continue
         xi = pos[0, i]
@@ -605,13 +604,13 @@ def _pairs(
         for k in range(ncount[i]):
             count = _pick(i, nbr[i, k], xi, yi, ri, cutoff, count, pair_index, pos, body)
         if count >= block:
-            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
-    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+            count = _block_full(count, pair_index, pair_values, pos, vel, body, flags, prm)
+    _pair_block(count, pair_index, pair_values, pos, vel, body, flags, prm)
 
 
 @numba.njit(cache=True)
 def _pairs_cells(
-    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    lo: int, hi: int, pos: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     members: IntArray, start: IntArray, ncx: int, ncy: int, pair_index: IntArray,
     pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
@@ -641,9 +640,7 @@ def _pairs_cells(
         i = members[_slot(p)]
         if end - p - 1 + above_hi - above_lo > block:
             runs = np.concatenate((members[p + 1 : end], members[above_lo:above_hi]))
-            count = _pick_each(
-                i, runs, count, pair_index, pair_values, pos, vel_old, body, flags, prm
-            )
+            count = _pick_each(i, runs, count, pair_index, pair_values, pos, vel, body, flags, prm)
             continue
         u = _slot(i)
         xi = pos[0, u]
@@ -654,18 +651,19 @@ def _pairs_cells(
         for q in range(above_lo, above_hi):
             count = _pick(i, members[_slot(q)], xi, yi, ri, cutoff, count, pair_index, pos, body)
         if count >= block:
-            count = _block_full(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
-    _pair_block(count, pair_index, pair_values, pos, vel_old, body, flags, prm)
+            count = _block_full(count, pair_index, pair_values, pos, vel, body, flags, prm)
+    _pair_block(count, pair_index, pair_values, pos, vel, body, flags, prm)
 
 
 @numba.njit(cache=True)
 def _settle(
-    lo: int, hi: int, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    lo: int, hi: int, pos: FloatArray, vel: FloatArray, body: FloatArray,
     rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
     prm: FloatArray,
 ) -> None:  # fmt: skip
     """Third pass: obstacles and passive objects act on particles lo..hi (what the particles do
-    to object m goes to acc[m]), then every particle's velocity with ground friction."""
+    to object m goes to acc[m]), then every particle's velocity with ground friction; the
+    force rows are cleared for the next step."""
     spring = prm[P_SPRING]
     cutoff = prm[P_CUTOFF]
     slide = prm[P_FRICTION]
@@ -676,11 +674,13 @@ def _settle(
         i = _slot(signed)
         xi = pos[0, i]
         yi = pos[1, i]
-        vxi = vel_old[0, i]
-        vyi = vel_old[1, i]
+        vxi = vel[0, i]
+        vyi = vel[1, i]
         ri = body[B_R, i]
         fx = body[B_FX, i]
         fy = body[B_FY, i]
+        body[B_FX, i] = 0.0
+        body[B_FY, i] = 0.0
         if check_obstacles:
             px, py, size = _obstacle_force(xi, yi, ri, vxi, vyi, rects, circles, prm)
             fx += px
@@ -838,7 +838,7 @@ def stale_list(
 
 @numba.njit(cache=True, fastmath=_FAST)
 def _stale_pairs(
-    pos: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, members: IntArray,
+    pos: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray, members: IntArray,
     start: IntArray, origin: float, cell: float, prm: FloatArray,
 ) -> None:  # fmt: skip
     """The pair pass as published: each particle i, in the cell it is in NOW, meets every
@@ -849,8 +849,8 @@ def _stale_pairs(
     for i in range(pos.shape[1]):
         xi = pos[0, i]
         yi = pos[1, i]
-        vxi = vel_old[0, i]
-        vyi = vel_old[1, i]
+        vxi = vel[0, i]
+        vyi = vel[1, i]
         ri = body[B_R, i]
         magi = body[B_MAG, i]
         kind_i = flags[F_KIND, i]
@@ -874,7 +874,7 @@ def _stale_pairs(
                     if d2 >= reach * reach or d2 == 0.0:
                         continue
                     px, py, contact, attract, touching = _law(
-                        j, dx, dy, d2, c, vxi, vyi, magi, vel_old, body, prm
+                        j, dx, dy, d2, c, vxi, vyi, magi, vel, body, prm
                     )
                     fx += px
                     fy += py
@@ -891,7 +891,7 @@ def _stale_pairs(
 @numba.njit(cache=True)
 def advance_stale(
     steps: int, first: int, sort_steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray,
-    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    ref: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
     hashes: IntArray, members: IntArray, start: IntArray, origin: float, cell: float,
     prm: FloatArray,
@@ -904,13 +904,13 @@ def advance_stale(
     listings = 0
     for s in range(steps):
         _targets_here(0, n, targets[s], ext, here)
-        _kinematics(0, n, here, pos, ref, vel, vel_old, body, flags, prm)
+        _kinematics(0, n, here, pos, ref, vel, body, flags, prm)
         _objects_move(objects, prm)
         if (first + s) % sort_steps == 0:
             stale_list(pos, origin, cell, hashes, members, start)
             listings += 1
-        _stale_pairs(pos, vel_old, body, flags, members, start, origin, cell, prm)
-        _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+        _stale_pairs(pos, vel, body, flags, members, start, origin, cell, prm)
+        _settle(0, n, pos, vel, body, rects, circles, objects, acc[0], prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)
     return listings
@@ -1117,25 +1117,26 @@ def _fill_chunks(
 
 BODY_KEPT = B_FX
 """Rows of `body` that carry over from step to step (r, the force sums the servo reads, the
-magnet factor); force x and y are a step's own, cleared before use, so a re-ordering skips them."""
+magnet factor); force x and y are a step's own, zero between steps, so a re-ordering skips them."""
 
 
 @numba.njit(cache=True)
 def _reorder(
-    order: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray,
+    order: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray,
     body: FloatArray, flags: ByteArray, ext: IntArray,
 ) -> None:  # fmt: skip
     """Every per-particle row (but a step's own force rows) and `ext` re-ordered: slot p takes
-    what slot order[p] held. Positions and velocities go through ref and vel_old, which a list
-    build then wants equal to them anyway; the rest through copies."""
+    what slot order[p] held. Positions go through ref, which a list build then wants equal to
+    them anyway; the rest through copies."""
     n = pos.shape[1]
     for axis in range(2):
         for p in range(n):
             ref[axis, p] = pos[axis, order[p]]
-        for p in range(n):
-            vel_old[axis, p] = vel[axis, order[p]]
     pos[:, :] = ref
-    vel[:, :] = vel_old
+    speeds = vel.copy()
+    for axis in range(2):
+        for p in range(n):
+            vel[axis, p] = speeds[axis, order[p]]
     kept = body[:BODY_KEPT]
     had = kept.copy()
     for r in range(BODY_KEPT):
@@ -1160,7 +1161,7 @@ def _gather(source: npt.NDArray[np.generic], order: IntArray, out: npt.NDArray[n
 @numba.njit(cache=True)
 def _reorder_gather(
     lo: int, hi: int, order: IntArray, cells: IntArray, pos: FloatArray, ref: FloatArray,
-    vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, ext: IntArray,
+    vel: FloatArray, body: FloatArray, flags: ByteArray, ext: IntArray, speeds: FloatArray,
     had: FloatArray, was: ByteArray, index: IntArray, sorted_cells: IntArray,
 ) -> None:  # fmt: skip
     """_reorder_split's first half for slots lo..hi: positions, velocities and cells gathered
@@ -1170,7 +1171,7 @@ def _reorder_gather(
     mine = order[lo:hi]
     for axis in range(2):
         _gather(pos[axis], mine, ref[axis, lo:hi])
-        _gather(vel[axis], mine, vel_old[axis, lo:hi])
+        _gather(vel[axis], mine, speeds[axis, lo:hi])
     _gather(cells, mine, sorted_cells[lo:hi])
     had[:, lo:hi] = body[:BODY_KEPT, lo:hi]
     was[:, lo:hi] = flags[:, lo:hi]
@@ -1180,13 +1181,13 @@ def _reorder_gather(
 @numba.njit(cache=True)
 def _reorder_place(
     lo: int, hi: int, order: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray,
-    vel_old: FloatArray, body: FloatArray, flags: ByteArray, ext: IntArray, had: FloatArray,
+    body: FloatArray, flags: ByteArray, ext: IntArray, speeds: FloatArray, had: FloatArray,
     was: ByteArray, index: IntArray,
 ) -> None:  # fmt: skip
     """_reorder_split's second half for slots lo..hi: every row takes its new order."""
     mine = order[lo:hi]
     pos[:, lo:hi] = ref[:, lo:hi]
-    vel[:, lo:hi] = vel_old[:, lo:hi]
+    vel[:, lo:hi] = speeds[:, lo:hi]
     for r in range(BODY_KEPT):
         _gather(had[r], mine, body[r, lo:hi])
     for r in range(FLAG_ROWS):
@@ -1197,22 +1198,23 @@ def _reorder_place(
 @numba.njit(parallel=True, cache=True)
 def _reorder_split(
     order: IntArray, cells: IntArray, pos: FloatArray, ref: FloatArray, vel: FloatArray,
-    vel_old: FloatArray, body: FloatArray, flags: ByteArray, ext: IntArray, splits: int,
+    body: FloatArray, flags: ByteArray, ext: IntArray, splits: int,
 ) -> IntArray:  # fmt: skip
     """_reorder in `splits` parallel index ranges (the same result: each slot is one copy),
     which also re-orders the particles' cells. Returns the cells in the new order."""
     n = pos.shape[1]
+    speeds = np.empty_like(vel)
     had = np.empty((BODY_KEPT, n), dtype=body.dtype)
     was = np.empty_like(flags)
     index = np.empty_like(ext)
     sorted_cells = np.empty_like(cells)
     for s in numba.prange(splits):
         lo, hi = _split(s, splits, n)
-        _reorder_gather(lo, hi, order, cells, pos, ref, vel, vel_old, body, flags, ext, had, was,
-                        index, sorted_cells)  # fmt: skip
+        _reorder_gather(lo, hi, order, cells, pos, ref, vel, body, flags, ext, speeds, had,
+                        was, index, sorted_cells)  # fmt: skip
     for s in numba.prange(splits):  # (once every range has read what it gathers)
         lo, hi = _split(s, splits, n)
-        _reorder_place(lo, hi, order, pos, ref, vel, vel_old, body, flags, ext, had, was, index)
+        _reorder_place(lo, hi, order, pos, ref, vel, body, flags, ext, speeds, had, was, index)
     return sorted_cells
 
 
@@ -1237,7 +1239,7 @@ def _row_bounds(start: IntArray, ncx: int, ncy: int, bounds: IntArray) -> None:
 
 @numba.njit(cache=True)
 def _prepare(
-    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, body: FloatArray,
     flags: ByteArray, ext: IntArray, bounds: IntArray, prm: FloatArray, sort: bool, splits: int,
     radius: float,
 ) -> tuple[int, int, IntArray, IntArray, IntArray]:  # fmt: skip
@@ -1259,11 +1261,11 @@ def _prepare(
         parts = min(splits, GRID_PARTS)
         ncx, ncy, cells, start, members = _grid_split(pos, radius, parts)
         if sort:
-            cells = _reorder_split(members, cells, pos, ref, vel, vel_old, body, flags, ext, splits)
+            cells = _reorder_split(members, cells, pos, ref, vel, body, flags, ext, splits)
     else:
         ncx, ncy, cells, start, members = _grid(pos, radius)
         if sort:
-            _reorder(members, pos, ref, vel, vel_old, body, flags, ext)
+            _reorder(members, pos, ref, vel, body, flags, ext)
             for c in range(ncx * ncy):  # the same grid, now in cell order
                 for p in range(start[c], start[c + 1]):
                     cells[p] = c
@@ -1295,14 +1297,14 @@ def _fill(
 
 @numba.njit(cache=True)
 def build_lists(
-    pos: FloatArray, ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray,
+    pos: FloatArray, ref: FloatArray, vel: FloatArray, body: FloatArray,
     flags: ByteArray, ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32],
     bounds: IntArray, prm: FloatArray, sort: bool, splits: int,
 ) -> ListArray:  # fmt: skip
     """Rebuilds the half neighbour lists from the current positions (see _prepare). Returns the
     lists' array (a wider one if some list did not fit)."""
     ncx, ncy, cells, start, _ = _prepare(
-        pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits, prm[P_LIST_RADIUS]
+        pos, ref, vel, body, flags, ext, bounds, prm, sort, splits, prm[P_LIST_RADIUS]
     )
     return _fill(pos, cells, start, ncx, ncy, nbr, ncount, bounds, prm)
 
@@ -1313,7 +1315,7 @@ def build_lists(
 @numba.njit(parallel=True, cache=True)
 def _kinematics_chunks(
     bounds: IntArray, row: FloatArray, ext: IntArray, here: FloatArray, pos: FloatArray,
-    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    ref: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     prm: FloatArray,
 ) -> float:  # fmt: skip
     """_targets_here and _kinematics over every chunk in parallel; the largest squared
@@ -1322,9 +1324,7 @@ def _kinematics_chunks(
     worst = np.zeros(chunks)
     for c in numba.prange(chunks):
         _targets_here(bounds[c], bounds[c + 1], row, ext, here)
-        worst[c] = _kinematics(
-            bounds[c], bounds[c + 1], here, pos, ref, vel, vel_old, body, flags, prm
-        )
+        worst[c] = _kinematics(bounds[c], bounds[c + 1], here, pos, ref, vel, body, flags, prm)
     most = 0.0
     for c in range(chunks):
         most = max(most, worst[c])
@@ -1333,7 +1333,7 @@ def _kinematics_chunks(
 
 @numba.njit(parallel=True, cache=True)
 def _pairs_chunks(
-    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    bounds: IntArray, parity: int, pos: FloatArray, vel: FloatArray, body: FloatArray,
     flags: ByteArray, nbr: ListArray, ncount: npt.NDArray[np.int32], pair_index: IntArray,
     pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
@@ -1343,14 +1343,14 @@ def _pairs_chunks(
     for half in numba.prange((chunks - parity + 1) // 2):
         c = 2 * half + parity
         _pairs(
-            bounds[c], bounds[c + 1], pos, vel_old, body, flags, nbr, ncount, pair_index[c],
+            bounds[c], bounds[c + 1], pos, vel, body, flags, nbr, ncount, pair_index[c],
             pair_values[c], prm,
         )  # fmt: skip
 
 
 @numba.njit(parallel=True, cache=True)
 def _pairs_cells_chunks(
-    bounds: IntArray, parity: int, pos: FloatArray, vel_old: FloatArray, body: FloatArray,
+    bounds: IntArray, parity: int, pos: FloatArray, vel: FloatArray, body: FloatArray,
     flags: ByteArray, members: IntArray, start: IntArray, ncx: int, ncy: int,
     pair_index: IntArray, pair_values: FloatArray, prm: FloatArray,
 ) -> None:  # fmt: skip
@@ -1360,21 +1360,21 @@ def _pairs_cells_chunks(
     for half in numba.prange((chunks - parity + 1) // 2):
         c = 2 * half + parity
         _pairs_cells(
-            bounds[c], bounds[c + 1], pos, vel_old, body, flags, members, start, ncx, ncy,
+            bounds[c], bounds[c + 1], pos, vel, body, flags, members, start, ncx, ncy,
             pair_index[c], pair_values[c], prm,
         )  # fmt: skip
 
 
 @numba.njit(parallel=True, cache=True)
 def _settle_chunks(
-    bounds: IntArray, pos: FloatArray, vel_old: FloatArray, vel: FloatArray, body: FloatArray,
+    bounds: IntArray, pos: FloatArray, vel: FloatArray, body: FloatArray,
     rects: FloatArray, circles: FloatArray, objects: FloatArray, acc: FloatArray,
     prm: FloatArray,
 ) -> None:  # fmt: skip
     """_settle over every chunk in parallel."""
     for c in numba.prange(bounds.shape[0] - 1):
         _settle(
-            bounds[c], bounds[c + 1], pos, vel_old, vel, body, rects, circles, objects, acc[c],
+            bounds[c], bounds[c + 1], pos, vel, body, rects, circles, objects, acc[c],
             prm,
         )  # fmt: skip
 
@@ -1388,7 +1388,7 @@ def _unsorted_radius(prm: FloatArray) -> float:
 
 @numba.njit(cache=True)
 def restore_lists(
-    ref: FloatArray, vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray,
+    ref: FloatArray, vel: FloatArray, body: FloatArray, flags: ByteArray,
     ext: IntArray, nbr: ListArray, ncount: npt.NDArray[np.int32], bounds: IntArray,
     prm: FloatArray, unsorted: int, splits: int,
 ) -> tuple[ListArray, bool]:  # fmt: skip
@@ -1398,12 +1398,12 @@ def restore_lists(
     holds them (advance's `listed`)."""
     if unsorted:
         _prepare(
-            ref.copy(), ref, vel, vel_old, body, flags, ext, bounds, prm, False, splits,
+            ref.copy(), ref, vel, body, flags, ext, bounds, prm, False, splits,
             _unsorted_radius(prm),
         )  # fmt: skip
         return nbr, False
     nbr = build_lists(
-        ref.copy(), ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, False, splits
+        ref.copy(), ref, vel, body, flags, ext, nbr, ncount, bounds, prm, False, splits
     )
     return nbr, True
 
@@ -1422,7 +1422,7 @@ def _lists_from_ref(
 @numba.njit(cache=True)
 def advance(
     steps: int, targets: FloatArray, ext: IntArray, pos: FloatArray, ref: FloatArray,
-    vel: FloatArray, vel_old: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
+    vel: FloatArray, body: FloatArray, flags: ByteArray, nbr: ListArray,
     ncount: npt.NDArray[np.int32], listed: bool, unsorted: int, rects: FloatArray,
     circles: FloatArray, objects: FloatArray, acc: FloatArray, bounds: IntArray,
     pair_index: IntArray, pair_values: FloatArray, prm: FloatArray, splits: int,
@@ -1449,24 +1449,24 @@ def advance(
     for s in range(steps):
         if inline:
             _targets_here(0, n, targets[s], ext, here)
-            moved = _kinematics(0, n, here, pos, ref, vel, vel_old, body, flags, prm)
+            moved = _kinematics(0, n, here, pos, ref, vel, body, flags, prm)
         else:
             moved = _kinematics_chunks(
-                bounds, targets[s], ext, here, pos, ref, vel, vel_old, body, flags, prm
+                bounds, targets[s], ext, here, pos, ref, vel, body, flags, prm
             )
         _objects_move(objects, prm)
         if inline:  # a small swarm: lists built whenever needed, pairs one at a time
             if moved > limit:
                 nbr = build_lists(
-                    pos, ref, vel, vel_old, body, flags, ext, nbr, ncount, bounds, prm, True,
+                    pos, ref, vel, body, flags, ext, nbr, ncount, bounds, prm, True,
                     splits,
                 )  # fmt: skip
                 rebuilds += 1
-            _pairs_each(0, n, pos, vel_old, body, flags, nbr, ncount, prm)
+            _pairs_each(0, n, pos, vel, body, flags, nbr, ncount, prm)
         elif moved > limit or unsorted > 0:
             sort = moved <= limit or unsorted + 1 >= SORT_EVERY
             ncx, ncy, _, start, members = _prepare(
-                pos, ref, vel, vel_old, body, flags, ext, bounds, prm, sort, splits,
+                pos, ref, vel, body, flags, ext, bounds, prm, sort, splits,
                 prm[P_LIST_RADIUS] if sort else _unsorted_radius(prm),
             )  # fmt: skip
             unsorted = 0 if sort else unsorted + 1
@@ -1474,7 +1474,7 @@ def advance(
             listed = False
             for parity in (0, 1):
                 _pairs_cells_chunks(
-                    bounds, parity, pos, vel_old, body, flags, members, start, ncx, ncy,
+                    bounds, parity, pos, vel, body, flags, members, start, ncx, ncy,
                     pair_index, pair_values, prm,
                 )  # fmt: skip
         else:
@@ -1483,13 +1483,13 @@ def advance(
                 listed = True
             for parity in (0, 1):
                 _pairs_chunks(
-                    bounds, parity, pos, vel_old, body, flags, nbr, ncount, pair_index,
+                    bounds, parity, pos, vel, body, flags, nbr, ncount, pair_index,
                     pair_values, prm,
                 )  # fmt: skip
         if inline:
-            _settle(0, n, pos, vel_old, vel, body, rects, circles, objects, acc[0], prm)
+            _settle(0, n, pos, vel, body, rects, circles, objects, acc[0], prm)
         else:
-            _settle_chunks(bounds, pos, vel_old, vel, body, rects, circles, objects, acc, prm)
+            _settle_chunks(bounds, pos, vel, body, rects, circles, objects, acc, prm)
         if objects.shape[0] > 0:
             _objects_settle(objects, acc, rects, circles, prm)
     return nbr, listed, unsorted, rebuilds

@@ -135,7 +135,6 @@ class World:
                 raise ValueError("velocity must give finite vx and vy for every particle")
             self._vel[0] = vx
             self._vel[1] = vy
-        self._vel_old = np.zeros((2, n), dtype=ftype)
         self._body = np.zeros((k.BODY_ROWS, n), dtype=ftype)
         self._body[k.B_R] = radii
         self._body[k.B_MAG] = 1.0
@@ -158,7 +157,7 @@ class World:
         self._dead_done = self.dead.count == 0
         self._setup_derived(n)
         self._nbr = k.build_lists(
-            self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
+            self._pos, self._ref, self._vel, self._body, self._flags, self._ext,
             self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._refresh_shadows()
@@ -355,16 +354,16 @@ class World:
             if self._stale:
                 rebuilds = k.advance_stale(
                     rows, self._steps, max(1, round(self.params.sort_interval / self.params.dt)),
-                    self._targets, self._ext, self._pos, self._ref, self._vel, self._vel_old,
-                    self._body, self._flags, self._rects, self._circles, self._objects,
-                    self._acc, self._stale_hashes, self._stale_members, self._stale_start,
+                    self._targets, self._ext, self._pos, self._ref, self._vel, self._body,
+                    self._flags, self._rects, self._circles, self._objects, self._acc,
+                    self._stale_hashes, self._stale_members, self._stale_start,
                     -self.params.half_width, 2 * self.params.r_max, self._prm,
                 )  # fmt: skip
             else:
                 self._nbr, self._listed, self._unsorted, rebuilds = k.advance(
-                    rows, self._targets, self._ext, self._pos, self._ref, self._vel,
-                    self._vel_old, self._body, self._flags, self._nbr, self._ncount, self._listed,
-                    self._unsorted, self._rects, self._circles, self._objects, self._acc,
+                    rows, self._targets, self._ext, self._pos, self._ref, self._vel, self._body,
+                    self._flags, self._nbr, self._ncount, self._listed, self._unsorted,
+                    self._rects, self._circles, self._objects, self._acc,
                     self._bounds, self._pair_index, self._pair_values, self._prm, self.threads,
                 )  # fmt: skip
             self.rebuilds += rebuilds
@@ -401,9 +400,8 @@ class World:
             raise ValueError(f"({x:.3f}, {y:.3f}) cuts into an obstacle")
         self._pos[:, slot] = (x, y)
         self._vel[:, slot] = 0.0
-        self._vel_old[:, slot] = 0.0
         self._nbr = k.build_lists(
-            self._pos, self._ref, self._vel, self._vel_old, self._body, self._flags, self._ext,
+            self._pos, self._ref, self._vel, self._body, self._flags, self._ext,
             self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._listed = True
@@ -517,8 +515,8 @@ class World:
         world._pos = a["pos"].copy()
         world._ref = a["ref"].copy()
         world._vel = a["vel"].copy()
-        world._vel_old = world._vel.copy()
         world._body = a["body"].copy()
+        world._body[k.B_FX :] = 0.0  # (older snapshots hold the last step's forces)
         world._flags = a["flags"].copy()
         world._ext = a["ext"].copy()
         world._objects = a["objects"].copy()
@@ -526,7 +524,7 @@ class World:
         # The last build exactly as it was, from the reference positions.
         world._unsorted = s.get("unsorted", 0)
         world._nbr, world._listed = k.restore_lists(
-            world._ref, world._vel, world._vel_old, world._body, world._flags, world._ext,
+            world._ref, world._vel, world._body, world._flags, world._ext,
             world._nbr, world._ncount, world._bounds, world._prm, world._unsorted, world.threads,
         )  # fmt: skip
         if world._stale and "stale_hashes" in a:

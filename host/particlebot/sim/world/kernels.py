@@ -8,8 +8,8 @@ caller's index of internal slot i. Passive objects (few, possibly huge discs) li
 array and meet every particle directly.
 
     pos     float64 (2, N)  x, y            ref  float64 (2, N)  x, y at the last list build
-    vel     F       (2, N)  vx, vy (the force passes read it as the step's old velocity;
-                            only the last pass writes it)
+    vel     F       (2, N)  vx, vy (the first pass reflects it at walls, the last sets it;
+                            the force passes between read it as the step's old velocity)
     body    F       (6, N)  r, contact-force sum, attraction sum, magnet factor (1, or 0 once
                             detached), force x, force y (the last two a step's own: zero
                             between steps; the pair passes add into them, the last pass reads
@@ -303,9 +303,9 @@ def _kinematics(
 ) -> float:  # fmt: skip
     """First pass: joins from the last step take effect, the servo moves the radius toward
     here[i] (from the last step's force sums, which are then cleared), positions advance by the
-    old velocity and walls reflect. The velocity stays as it is until the last pass (the force
-    passes read it as the step's old velocity), and the force rows are zero (the last pass
-    cleared them, as it read them: here their cache lines would be fetched only to be zeroed).
+    old velocity and walls reflect it. From here to the last pass nothing writes the velocity
+    (the force passes read it as the step's old velocity), and the force rows are zero (the last
+    pass cleared them as it read them: here their cache lines would be fetched only to be zeroed).
     Returns the largest squared displacement since the last list build."""
     dt = prm[P_DT]
     wall = prm[P_HALF_WIDTH]

@@ -9,6 +9,7 @@ from importlib.metadata import version
 from pathlib import Path
 
 import pytest
+from rich.text import Text
 from textual.widgets import Static
 
 from particlebot.cli import main
@@ -45,7 +46,13 @@ def test_the_demo_script_drives_the_live_console_with_its_map_to_a_clean_end() -
     assert isinstance(radio, VirtualRadio)
     swarm = Swarm(radio, log_dir=None)
     script = DemoScript(swarm, method="A", cycle_steps=75, run_s=20.0)
-    app = ConsoleApp(swarm, script=script, linger_s=0.1, world_map=script.world_map)
+    drawn: list[Text] = []  # every top view the console drew, as drawn
+
+    def world_map(width: int, height: int) -> Text:
+        drawn.append(script.world_map(width, height))
+        return drawn[-1]
+
+    app = ConsoleApp(swarm, script=script, linger_s=0.1, world_map=world_map)
     maps: list[str] = []
 
     async def run() -> int | None:
@@ -61,10 +68,13 @@ def test_the_demo_script_drives_the_live_console_with_its_map_to_a_clean_end() -
         swarm.close()
     assert script.stop_report is not None and script.stop_report.confirmed
     assert code == 0
-    # The top view beside the table: the lamp, five particles, the centroid and the scale.
-    shown = maps[-1]
-    assert shown.count("*") == 1 and "+" in shown and "1 col = " in shown
+    assert "1 col = " in maps[-1]  # the top view is on the screen beside the table
+    # The last one: the lamp, five particles, the centroid (a + between particles, or the
+    # particle it falls on reversed) and the scale.
+    shown = str(drawn[-1])
+    assert shown.count("*") == 1 and "1 col = " in shown
     assert sum(shown.count(c) for c in "O@") == 5
+    assert "+" in shown or any("reverse" in str(span.style) for span in drawn[-1].spans)
 
 
 def test_export_and_replay_read_the_log_the_demo_wrote(

@@ -44,9 +44,9 @@ def render_map(
     height: int,
 ) -> Text:
     """width x height characters: the particles (O contracted, @ expanded, coloured by state),
-    the centroid's track (.) and where it is now (+), framed around the swarm; the lamp (*) where
-    it is, or on the frame's edge in its direction when it lies beyond. The last line gives the
-    scale and the distance to the lamp."""
+    the centroid's track (.) and where it is now (+, or the particle on it reversed), framed
+    around the swarm; the lamp (*) where it is, or on the frame's edge in its direction when it
+    lies beyond. The last line gives the scale and the distance to the lamp."""
     rows = max(3, height - 1)
     cx = sum(p.x for p in particles) / max(1, len(particles))
     cy = sum(p.y for p in particles) / max(1, len(particles))
@@ -72,10 +72,15 @@ def render_map(
 
     for x, y in track:
         put(x, y, ".", "dim")
+    put(cx, cy, "+", "bold white")
+    # The particles over the centroid's mark: in a small blob the centroid often lies on the
+    # middle particle's cell, which then shows the particle, reversed, rather than hiding it.
+    centroid_cell = tuple(round(v) for v in cell(cx, cy))
     for p in particles:
         style = "white" if p.state is None else STATE_STYLES.get(p.state, "white")
+        if tuple(round(v) for v in cell(p.x, p.y)) == centroid_cell:
+            style = f"{style} reverse"
         put(p.x, p.y, "@" if p.expanded else "O", style)
-    put(cx, cy, "+", "bold white")
     # The lamp, or where the line toward it leaves the frame.
     col, row = cell(*lamp)
     centre_col, centre_row = cell(cx, cy)

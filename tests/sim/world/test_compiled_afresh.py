@@ -1,5 +1,6 @@
-"""A seeded swarm follows the same path whether numba compiles the kernels afresh or loads them
-from its cache (it once did not: fast-math pair arithmetic came out differently optimised)."""
+"""The kernels compiled afresh and loaded from numba's cache: a seeded swarm follows the same path
+either way (it once did not: fast-math pair arithmetic came out differently optimised), and a
+fresh process can resume a swarm with cached kernels (it once segfaulted)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,8 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 # A packed blob large enough for the parallel path, run for a second; prints a digest of every
 # particle's position, velocity and radius.
@@ -32,17 +35,71 @@ print(digest.hexdigest())
 """
 
 
-def _run(cache: Path) -> str:
+# A small swarm (the inline path) resumed from a snapshot file as the first thing the process
+# does, as `particlebot simulate --resume` does: prints a digest of it after 50 steps. Without
+# the file, makes it instead (50 steps, saved) and prints "made".
+_RESUME = """
+import hashlib
+import sys
+from pathlib import Path
+import numpy as np
+from particlebot.sim.world import World
+from particlebot.sim.world.world import Snapshot
+
+path = Path(sys.argv[1])
+if not path.exists():
+    from particlebot.sim.particles.model.published import PublishedController
+    from particlebot.sim.world import Lamp
+
+    xs = np.array([0.0, 0.2, 0.4])
+    made = World(xs, np.zeros(3), controller=PublishedController(), lamp=Lamp(-3.0, 0.0), seed=1)
+    made.step(50)
+    made.snapshot().save(path)
+    print("made")
+    sys.exit(0)
+world = World.from_snapshot(Snapshot.load(path))
+world.step(50)
+state = world.state()
+digest = hashlib.sha256()
+for row in (state.x, state.y, state.vx, state.vy, world.radii()):
+    digest.update(np.ascontiguousarray(row).tobytes())
+print(digest.hexdigest())
+"""
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One numba cache for the module, empty at first (the second test then compiles only what
+    the first did not)."""
+    return tmp_path_factory.mktemp("numba-cache")
+
+
+def _run(cache: Path, script: str = _RUN, *args: str) -> str:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
     done = subprocess.run(
-        [sys.executable, "-c", _RUN], env=env, capture_output=True, text=True, timeout=600
-    )
-    assert done.returncode == 0, done.stderr
+        [sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, f"exit {done.returncode}: {done.stderr[-2000:]}"
     return done.stdout.strip().splitlines()[-1]
 
 
-def test_fresh_and_cached_kernels_give_the_same_bits(tmp_path: Path) -> None:
-    fresh = _run(tmp_path)  # an empty cache: everything compiled in this process
-    assert any(tmp_path.rglob("*.nbc"))  # and written to the cache
-    cached = _run(tmp_path)
+def test_fresh_and_cached_kernels_give_the_same_bits(cache: Path) -> None:
+    fresh = _run(cache)  # an empty cache: everything compiled in this process
+    assert any(cache.rglob("*.nbc"))  # and written to the cache
+    cached = _run(cache)
     assert cached == fresh
+
+
+def test_a_fresh_process_resumes_a_small_swarm_from_cached_kernels(
+    cache: Path, tmp_path: Path
+) -> None:
+    # The kernels that can reach a parallel region link against numba's scheduler, whose
+    # symbols exist only once its thread pool has started. Resuming is the first kernel call
+    # of `simulate --resume`, and a small swarm starts no pool on its own: restore_lists,
+    # compiled in such a process and then loaded from the cache, segfaulted (exit -11).
+    snapshot = tmp_path / "small.npz"
+    assert _run(cache, _RESUME, str(snapshot)) == "made"
+    first = _run(cache, _RESUME, str(snapshot))  # compiles what resuming needs, caches it
+    again = _run(cache, _RESUME, str(snapshot))  # resumes with everything from the cache
+    assert again == first

@@ -35,12 +35,12 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-# Start numba's thread pool before any kernel is loaded. Its start registers the parallel
-# scheduler's symbols (allocate_sched, ...) with LLVM, and every kernel that can reach a parallel
-# region links against them; a kernel loaded from numba's cache does not start the pool. A fresh
-# process whose first kernel came from the cache and reached one (resuming a small swarm:
-# restore_lists, before any step) segfaulted, or failed to compile against a cached one with
-# "LLVM ERROR: Symbol not found: allocate_sched" (the kind of numba issue #2439).
+# Start numba's thread pool before any kernel is compiled or loaded. Starting it registers the
+# parallel scheduler's symbols (allocate_sched, ...) with LLVM; kernels that reach a parallel
+# region link against them, and a small swarm never starts the pool itself. `simulate --resume`
+# of a small swarm calls restore_lists first: compiled in such a process and loaded from numba's
+# cache by the next, it segfaulted; compiled against cached kernels, it failed with "LLVM ERROR:
+# Symbol not found: allocate_sched" (the kind of numba issue #2439). test_compiled_afresh.py.
 numba.get_num_threads()
 
 # ---- indices into the parameter vector `prm` (float64) -------------------------------------

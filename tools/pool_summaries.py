@@ -3,7 +3,9 @@
 
 A study's own report pools runs from their records (copy the runs/*.json of several results
 folders into one and run --report-only). This is for when only the summaries are left: the
-pooled mean and sample sd are exact, up to the six significant digits a summary keeps.
+pooled mean and sample sd are exact, up to the six significant digits a summary keeps. The
+planned runs add up too (a summary cannot say which seeds it planned, so plans that overlap
+count twice).
 
     tools/pool_summaries.py A/summary.csv B/summary.csv -o pooled.csv
 """

@@ -3,13 +3,21 @@
 dead-particle speeds relative to each size's 0 % cell and with one published number changed,
 speed against size and against the contact shear, Fig. S18 (gap success against gap size, all
 sizes on one plot) and Fig. S20 relative to the noise-free speed. Folders that are missing are
-left out of the figures."""
+left out of the figures.
+
+A folder that is not there is read from the summary docs/studies keeps of it (DOCS_SUMMARIES),
+so every figure but the dashpot's (whose runs are kept in another form) redraws from a clone:
+
+    tools/studies_figures.py docs/studies docs/studies \
+        --figures dead,speed,shear,placement,gap,noise
+"""
 
 from __future__ import annotations
 
 import argparse
 import csv
 import math
+import sys
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -27,9 +35,46 @@ Cells = dict[int, list[tuple[float, float, float, int]]]
 """particles -> [(sweep value, mean, sd, runs)] of one metric, sorted by the sweep value."""
 
 
+DOCS_SUMMARIES = {
+    "dead-small": "dead-10-100.csv",
+    "dead-high": "dead-10-100-high.csv",
+    "dead-1000": "dead-1000.csv",
+    "dead-1000-high": "dead-1000-high.csv",
+    "dead-10000": "dead-10000.csv",
+    "dead-10000-all": "dead-10000-pooled.csv",
+    "dead-static1": "dead-10-100-static1.csv",
+    "dead-nophasenoise": "dead-10-100-nophasenoise.csv",
+    "dead-both": "dead-10-100-both.csv",
+    "dead-cand-small": "dead-10-100-cand.csv",
+    "dead-cand-1000": "dead-1000-cand.csv",
+    "dead-cand-1000b": "dead-1000-cand-b.csv",
+    "dead-cand-1000c": "dead-1000-cand-c.csv",
+    "dead-cand-10000": "dead-10000-cand.csv",
+    "dead-calm-1000": "dead-10-1000-calm.csv",
+    "dead-calm-10000": "dead-10000-calm.csv",
+    "speed-small": "speed-10-300.csv",
+    **{f"dead-mid{s}": "dead-10-10000-shear25.csv" for s in ("", "-1000", "-10000")},
+    **{
+        f"shear{shear}-{s}": f"dead-10-10000-shear{shear}.csv"
+        for shear in ("27.5", "28.5", "29")
+        for s in ("small", "1000", "10000")
+    },
+    **{f"place-pub-{s}": "dead-published-blob.csv" for s in ("small", "1000", "10000")},
+    **{f"place-fit-{s}": "dead-published-blob-t0.7-s27.5.csv" for s in ("small", "1000", "10000")},
+    **{f"gap-{n}": f"gap-{n}.csv" for n in (10, 100, 1000)},
+    **{f"noise-{n}": f"noise-{n}.csv" for n in (100, 1000, 10000)},
+}
+"""Study folder -> the file in docs/studies that keeps its summary.csv (a file may keep several
+folders' cells: the folders of one study run in parts). Checked: drawn from these, every figure
+but the dashpot's came out byte for byte as drawn from the folders."""
+
+
 def read(folder: Path, metric: str) -> Cells:
-    """One metric of a study folder's summary.csv; empty when the folder has none."""
+    """One metric of a study folder's summary.csv, or of the file in the folder's parent that
+    keeps it (DOCS_SUMMARIES); empty when neither is there."""
     path = folder / "summary.csv"
+    if not path.is_file() and folder.name in DOCS_SUMMARIES:
+        path = folder.parent / DOCS_SUMMARIES[folder.name]
     cells: Cells = defaultdict(list)
     if not path.is_file():
         return cells
@@ -600,23 +645,37 @@ def noise_figure(results: Path, out: Path) -> list[Path]:
     return [save(fig, out / "noise.png")]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+FIGURES = {
+    "dead": dead_figures,
+    "speed": speed_figure,
+    "shear": shear_figure,
+    "dashpot": dashpot_figure,
+    "placement": placement_figure,
+    "gap": gap_figure,
+    "noise": noise_figure,
+}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("results", type=Path, help="folder holding the study folders")
     parser.add_argument("out", type=Path, help="where the PNGs go (docs/studies)")
+    parser.add_argument(
+        "--figures", default=",".join(FIGURES), help=f"which (default: all): {','.join(FIGURES)}"
+    )
     args = parser.parse_args()
+    names = [name.strip() for name in args.figures.split(",") if name.strip()]
+    unknown = [name for name in names if name not in FIGURES]
+    if unknown or not names:
+        print(f"studies_figures: --figures: not a figure: {', '.join(unknown) or '(none)'}"
+              f" (choose from {', '.join(FIGURES)})", file=sys.stderr)  # fmt: skip
+        return 2
     args.out.mkdir(parents=True, exist_ok=True)
-    for path in (
-        dead_figures(args.results, args.out)
-        + speed_figure(args.results, args.out)
-        + shear_figure(args.results, args.out)
-        + dashpot_figure(args.results, args.out)
-        + placement_figure(args.results, args.out)
-        + gap_figure(args.results, args.out)
-        + noise_figure(args.results, args.out)
-    ):
-        print(path)
+    for name in names:
+        for path in FIGURES[name](args.results, args.out):
+            print(path)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

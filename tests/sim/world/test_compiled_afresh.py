@@ -11,11 +11,22 @@ from pathlib import Path
 
 import pytest
 
-# A packed blob large enough for the parallel path, run for a second; prints a digest of every
-# particle's position, velocity and radius.
-_RUN = """
+# The end of a script that ran `world`: prints a digest of every particle's position, velocity
+# and radius.
+_DIGEST = """
 import hashlib
 import numpy as np
+
+state = world.state()
+digest = hashlib.sha256()
+for row in (state.x, state.y, state.vx, state.vy, world.radii()):
+    digest.update(np.ascontiguousarray(row).tobytes())
+print(digest.hexdigest())
+"""
+
+# A packed blob large enough for the parallel path, run for a second.
+_RUN = (
+    """
 from particlebot.sim.particles.model.published import PublishedController
 from particlebot.sim.scenarios.placement import hexagonal
 from particlebot.sim.world import Lamp, PhysicsParams, World
@@ -27,19 +38,16 @@ controller = PublishedController()
 world = World(blob.xy[:, 0], blob.xy[:, 1], controller=controller, lamp=Lamp(-30.0, 0.0), seed=1)
 for _ in range(100):
     world.step(1)
-state = world.state()
-digest = hashlib.sha256()
-for row in (state.x, state.y, state.vx, state.vy, world.radii()):
-    digest.update(np.ascontiguousarray(row).tobytes())
-print(digest.hexdigest())
 """
+    + _DIGEST
+)
 
 
 # A small swarm (the inline path) resumed from a snapshot file as the first thing the process
-# does, as `particlebot simulate --resume` does: prints a digest of it after 50 steps. Without
-# the file, makes it instead (50 steps, saved) and prints "made".
-_RESUME = """
-import hashlib
+# does, as `particlebot simulate --resume` does, and run 50 steps on. Without the file, makes it
+# instead (50 steps, saved) and prints "made".
+_RESUME = (
+    """
 import sys
 from pathlib import Path
 import numpy as np
@@ -59,12 +67,9 @@ if not path.exists():
     sys.exit(0)
 world = World.from_snapshot(Snapshot.load(path))
 world.step(50)
-state = world.state()
-digest = hashlib.sha256()
-for row in (state.x, state.y, state.vx, state.vy, world.radii()):
-    digest.update(np.ascontiguousarray(row).tobytes())
-print(digest.hexdigest())
 """
+    + _DIGEST
+)
 
 
 @pytest.fixture(scope="module")

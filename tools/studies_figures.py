@@ -106,7 +106,7 @@ PUBLISHED_DEAD = (
     "dead-high",
     "dead-1000",
     "dead-1000-high",
-    "dead-10000-all",  # 0-80 % dead, 5-6 seeds (holds the older dead-10000-s3's runs too)
+    "dead-10000-all",  # 0-80 % dead, every seed run (docs: the pooled summary)
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
 

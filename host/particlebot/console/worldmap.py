@@ -65,8 +65,13 @@ def render_map(
             (mid_y - y) / (scale * CELL_ASPECT) + (rows - 1) / 2,
         )
 
+    def square(x: float, y: float) -> tuple[int, int]:
+        """The character cell (column, row) a floor point falls in."""
+        col, row = cell(x, y)
+        return round(col), round(row)
+
     def put(x: float, y: float, char: str, style: str) -> None:
-        col, row = (round(v) for v in cell(x, y))
+        col, row = square(x, y)
         if 0 <= col < width and 0 <= row < rows:
             grid[row][col] = (char, style)
 
@@ -75,10 +80,10 @@ def render_map(
     put(cx, cy, "+", "bold white")
     # The particles over the centroid's mark: in a small blob the centroid often lies on the
     # middle particle's cell, which then shows the particle, reversed, rather than hiding it.
-    centroid_cell = tuple(round(v) for v in cell(cx, cy))
+    centroid = square(cx, cy)
     for p in particles:
         style = "white" if p.state is None else STATE_STYLES.get(p.state, "white")
-        if tuple(round(v) for v in cell(p.x, p.y)) == centroid_cell:
+        if square(p.x, p.y) == centroid:
             style = f"{style} reverse"
         put(p.x, p.y, "@" if p.expanded else "O", style)
     # The lamp, or where the line toward it leaves the frame.

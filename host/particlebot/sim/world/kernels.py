@@ -545,8 +545,9 @@ def _pick(
     dy = pos[1, u] - yi
     d2 = dx * dx + dy * dy
     reach = ri + body[B_R, u] + cutoff
-    index[0, count] = j
-    index[1, count] = i
+    at = _slot(count)  # (signed, it cost 4 of the scan's 28 instructions a candidate: see _slot)
+    index[0, at] = j
+    index[1, at] = i
     return count + ((d2 < reach * reach) & (d2 != 0.0))
 
 

@@ -1008,15 +1008,16 @@ def _bin(
     for q in range(xs.shape[0]):
         c = int((ys[q] - y0) / size) * ncx + int((xs[q] - x0) / size)
         cells[q] = c
-        count[c] += 1
+        count[_slot(c)] += 1
 
 
 @numba.njit(cache=True)
 def _deal(first: int, cells: IntArray, fill: IntArray, members: IntArray) -> None:
     """Particles first, first + 1, ... into their cells' next free places."""
     for q in range(cells.shape[0]):
-        members[fill[cells[q]]] = first + q
-        fill[cells[q]] += 1
+        c = _slot(cells[q])
+        members[_slot(fill[c])] = first + q
+        fill[c] += 1
 
 
 SORT_EVERY = 12
@@ -1137,34 +1138,26 @@ def _reorder(
     """Every per-particle row (but a step's own force rows) and `ext` re-ordered: slot p takes
     what slot order[p] held. Positions go through ref, which a list build then wants equal to
     them anyway; the rest through copies."""
-    n = pos.shape[1]
     for axis in range(2):
-        for p in range(n):
-            ref[axis, p] = pos[axis, order[p]]
+        _gather(pos[axis], order, ref[axis])
     pos[:, :] = ref
     speeds = vel.copy()
     for axis in range(2):
-        for p in range(n):
-            vel[axis, p] = speeds[axis, order[p]]
-    kept = body[:BODY_KEPT]
-    had = kept.copy()
+        _gather(speeds[axis], order, vel[axis])
+    had = body[:BODY_KEPT].copy()
     for r in range(BODY_KEPT):
-        for p in range(n):
-            kept[r, p] = had[r, order[p]]
+        _gather(had[r], order, body[r])
     was = flags.copy()
     for r in range(FLAG_ROWS):
-        for p in range(n):
-            flags[r, p] = was[r, order[p]]
-    index = ext.copy()
-    for p in range(n):
-        ext[p] = index[order[p]]
+        _gather(was[r], order, flags[r])
+    _gather(ext.copy(), order, ext)
 
 
 @numba.njit(cache=True, inline="always")
 def _gather(source: npt.NDArray[np.generic], order: IntArray, out: npt.NDArray[np.generic]) -> None:
     """out[q] = source[order[q]]."""
     for q in range(out.shape[0]):
-        out[q] = source[order[q]]
+        out[q] = source[_slot(order[q])]
 
 
 @numba.njit(cache=True)

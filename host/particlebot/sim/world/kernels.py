@@ -1092,7 +1092,7 @@ def _fill_lists(
             u = _slot(j)
             dx = pos[0, u] - xi
             dy = pos[1, u] - yi
-            nbr[i, min(count, width)] = j
+            nbr[i, _slot(min(count, width))] = j
             count += dx * dx + dy * dy < r2
         if cy + 1 < ncy:
             above = row + ncx
@@ -1100,7 +1100,7 @@ def _fill_lists(
                 u = _slot(j)
                 dx = pos[0, u] - xi
                 dy = pos[1, u] - yi
-                nbr[i, min(count, width)] = j
+                nbr[i, _slot(min(count, width))] = j
                 count += dx * dx + dy * dy < r2
         ncount[i] = min(count, width)
         longest = max(longest, count)

@@ -20,7 +20,7 @@ help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
 	@echo "make test      set everything up and run every check (lint, C++ tests, pytest, simavr)"
 	@echo "make firmware  build build/firmware/particle.elf and .hex with Debian's avr-gcc"
-	@echo "make bench     run the benchmarks whose figures README reports"
+	@echo "make bench     run the benchmarks in benchmarks/ whose figures README reports"
 
 # ---- setup ------------------------------------------------------------------------------------
 
@@ -256,14 +256,14 @@ harness: $(BUILD)/.system-deps $(BUILD)/sim/particle_sim
 # ---- checks -------------------------------------------------------------------------------------
 
 lint: $(VENV)/.installed $(BUILD)/.system-deps
-	$(VENV)/bin/ruff check host tests tools
-	$(VENV)/bin/ruff format --check host tests tools
+	$(VENV)/bin/ruff check host tests tools benchmarks
+	$(VENV)/bin/ruff format --check host tests tools benchmarks
 	$(VENV)/bin/mypy
 	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 format: $(VENV)/.installed
-	$(VENV)/bin/ruff format host tests tools
-	$(VENV)/bin/ruff check --fix host tests tools
+	$(VENV)/bin/ruff format host tests tools benchmarks
+	$(VENV)/bin/ruff check --fix host tests tools benchmarks
 	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)
@@ -282,7 +282,7 @@ demo: system-deps venv native
 	@echo "particlebot and pio are in $(VENV)/bin: run '. $(VENV)/bin/activate' to call them by name"
 
 bench: venv native firmware firmware-faults harness
-	$(VPY) tools/bench.py
+	$(VPY) benchmarks/bench.py
 
 clean:
 	rm -rf $(BUILD)

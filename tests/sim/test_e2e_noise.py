@@ -36,7 +36,7 @@ ROUND_MS = 1000
 SPRAY_S = 3.0
 SPRAY_EVERY_S = 0.04
 # An edge of the pulse waits while another interrupt (Timer0, Serial1) finishes; the longest,
-# Serial1's transmit interrupt, takes ~120 cycles (15 us). tools/bench_sim.py saw 14.25 us.
+# Serial1's transmit interrupt, takes ~120 cycles (15 us). benchmarks/bench_sim.py saw 14.25 us.
 SERVO_JITTER_US = 20
 
 

@@ -39,7 +39,7 @@ ROUND_MS = 1000
 CONTRACTED_US = PARAM_SPECS[Param.SERVO_CAL_0].default
 EXPANDED_US = CONTRACTED_US + 100
 # An edge of the pulse waits while another interrupt (millis, Serial1) finishes; the longest,
-# Serial1's transmit interrupt, takes ~120 cycles (15 us). tools/bench_sim.py saw 14.25 us.
+# Serial1's transmit interrupt, takes ~120 cycles (15 us). benchmarks/bench_sim.py saw 14.25 us.
 SERVO_JITTER_US = 20
 STOP_WITHIN_S = 1.0
 """From the console's STOP command to the last servo at the contracted pulse (the issue's

@@ -36,7 +36,7 @@ CONTRACTED_US = PARAM_SPECS[Param.SERVO_CAL_0].default
 ROUND_S = PARAM_SPECS[Param.ROUND_MS].default / 1000
 STATUS_PERIOD_S = PARAM_SPECS[Param.STATUS_PERIOD_MS].default / 1000
 # An edge of the servo pulse waits while another interrupt (Timer0, Serial1) finishes; the longest,
-# Serial1's transmit interrupt, takes ~120 cycles (15 us). tools/bench_sim.py saw 14.25 us.
+# Serial1's transmit interrupt, takes ~120 cycles (15 us). benchmarks/bench_sim.py saw 14.25 us.
 SERVO_JITTER_US = 20
 # Photocell voltages all different, so a mix-up of the A0..A5 channels shows.
 LIGHT_MV = (400, 900, 1400, 1900, 2400, 2900)

@@ -9,19 +9,25 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
+
+def _script(name: str) -> list[str]:
+    """The command that runs one benchmark script of this folder."""
+    return [sys.executable, f"benchmarks/{name}"]
+
+
 # Each entry: a heading and the command that prints its figures. Order: cheapest first, so a
 # reader sees results early; the emulator benchmark runs K simavr processes and takes minutes.
 BENCHMARKS: list[tuple[str, list[str]]] = [
     ("Firmware image size against the budget", ["make", "-s", "firmware"]),
-    ("Host protocol decoder", [sys.executable, "tools/bench_decoder.py"]),
-    ("Host receive path", [sys.executable, "tools/bench_host.py"]),
-    ("Simulated swarms in the world", [sys.executable, "tools/bench_world_swarms.py"]),
-    ("Vectorised firmware controller", [sys.executable, "tools/bench_firmware_controller.py"]),
-    ("STOP right after a base-station restart", [sys.executable, "tools/bench_stop_restart.py"]),
-    ("Swarm placement (SI Algorithm 5)", [sys.executable, "tools/bench_placement.py"]),
-    ("The world stepping a packed blob", [sys.executable, "tools/bench_world.py"]),
-    ("Firmware in the loop (simavr)", [sys.executable, "tools/bench_sim.py"]),
-    ("Video tracker on synthetic runs", [sys.executable, "tools/bench_tracker.py"]),
+    ("Host protocol decoder", _script("bench_decoder.py")),
+    ("Host receive path", _script("bench_host.py")),
+    ("Simulated swarms in the world", _script("bench_world_swarms.py")),
+    ("Vectorised firmware controller", _script("bench_firmware_controller.py")),
+    ("STOP right after a base-station restart", _script("bench_stop_restart.py")),
+    ("Swarm placement (SI Algorithm 5)", _script("bench_placement.py")),
+    ("The world stepping a packed blob", _script("bench_world.py")),
+    ("Firmware in the loop (simavr)", _script("bench_sim.py")),
+    ("Video tracker on synthetic runs", _script("bench_tracker.py")),
 ]
 
 

@@ -1,7 +1,7 @@
 """Speed of simulated swarms in the world: simulated seconds per wall second for virtual particles
 (the firmware logic) and emulated ones (the image in simavr), STARTed and cycling.
 
-    python tools/bench_world_swarms.py [--virtual 10 100 1000] [--emulated 1 5 10]
+    python benchmarks/bench_world_swarms.py [--virtual 10 100 1000] [--emulated 1 5 10]
 
 Each swarm is a blob (SI Algorithm 5) 1.5 m from the lamp, STARTed with method A at T = 3 s; the
 clock runs from the end of the estimation round, so every particle cycles or pauses on its wave.

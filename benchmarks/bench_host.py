@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Measures the host receive path (decode, console model, log); the simulated swarms' speed is
-tools/bench_world_swarms.py's."""
+benchmarks/bench_world_swarms.py's."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """STOP pressed right after the base station restarts during a run at 50 % loss: how often it is
 called confirmed while a particle still moves, over many seeds, with and without the grace period.
 
-    python tools/bench_stop_restart.py [--seeds 100] [--particles 6 10] [--loss 0.5]
+    python benchmarks/bench_stop_restart.py [--seeds 100] [--particles 6 10] [--loss 0.5]
 
 For each seed a session starts a run on virtual particles and is closed (the console quit, the
 laptop rebooted); a new session, which has heard nobody, sends STOP at once. Its verdict is set

@@ -1,6 +1,6 @@
 """Benchmarks of the firmware-in-the-loop emulation: speed, servo timing, method-D round length.
 
-    python tools/bench_sim.py [--quick] [--json FILE]
+    python benchmarks/bench_sim.py [--quick] [--json FILE]
 
 Needs `make firmware harness`. Prints, for the README:
 1. emulated seconds per wall second for 1 and 5 particles (idle, and 5 while running a wave);

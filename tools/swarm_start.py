@@ -12,10 +12,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rattle_share import FAST_M_S, published_swarm  # (tools/, beside this script)
 from scipy.spatial import cKDTree
 
 from particlebot.sim.world import PhysicsParams
+from rattle_share import FAST_M_S, published_swarm  # (tools/, beside this script)
 
 TOUCH_M = 0.002
 """Neighbours closer than this gap count as touching (the magnets' blend gap, rounded up)."""

@@ -1,36 +1,24 @@
-"""tools/gen_protocol.py: validation, definition hash, determinism and the --check mode."""
+"""tools/gen_protocol.py and its protocolgen package: validation, definition hash, determinism and
+the --check mode."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import re
 import subprocess
 import sys
 import zlib
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 
 from particlebot.protocol import DEFINITION_HASH
+from protocolgen.parse import DefinitionError, parse
 from tests.protocol.protocol_reference import DEFINITION, REPO_ROOT
 
 GENERATOR = REPO_ROOT / "tools" / "gen_protocol.py"
 CPP = REPO_ROOT / "firmware" / "lib" / "protocol" / "protocol_gen.h"
 PY = REPO_ROOT / "host" / "particlebot" / "protocol" / "generated.py"
-
-
-def _load_generator() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("gen_protocol", GENERATOR)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["gen_protocol"] = module  # dataclasses look their module up while decorating
-    spec.loader.exec_module(module)
-    return module
-
-
-gen = _load_generator()
 TEXT = DEFINITION.read_text()
 
 
@@ -45,7 +33,7 @@ def _run(*args: str | Path) -> subprocess.CompletedProcess[str]:
 
 
 def _hash(text: str) -> int:
-    return int(gen.parse(text).hash)
+    return int(parse(text).hash)
 
 
 def test_check_passes_on_the_committed_outputs() -> None:
@@ -96,7 +84,7 @@ def test_outputs_open_with_a_purpose_line_then_the_generated_notice() -> None:
 
 
 def test_hash_is_crc32_of_the_canonical_json_and_matches_both_outputs() -> None:
-    definition = gen.parse(TEXT)
+    definition = parse(TEXT)
     canonical = json.dumps(definition.canonical(), sort_keys=True, separators=(",", ":"))
     assert "description" not in canonical
     assert definition.hash == zlib.crc32(canonical.encode()) == DEFINITION_HASH
@@ -155,8 +143,8 @@ def test_invalid_definitions_are_refused_with_a_reason(
     tmp_path: Path, old: str, new: str, complaint: str
 ) -> None:
     assert old in TEXT
-    with pytest.raises(gen.DefinitionError, match=re.escape(complaint)):
-        gen.parse(TEXT.replace(old, new, 1))
+    with pytest.raises(DefinitionError, match=re.escape(complaint)):
+        parse(TEXT.replace(old, new, 1))
     definition = tmp_path / "protocol.toml"
     definition.write_text(TEXT.replace(old, new, 1))
     result = _run(

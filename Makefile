@@ -256,14 +256,14 @@ harness: $(BUILD)/.system-deps $(BUILD)/sim/particle_sim
 # ---- checks -------------------------------------------------------------------------------------
 
 lint: $(VENV)/.installed $(BUILD)/.system-deps
-	$(VENV)/bin/ruff check host tests tools benchmarks
-	$(VENV)/bin/ruff format --check host tests tools benchmarks
+	$(VENV)/bin/ruff check host tests tools benchmarks research
+	$(VENV)/bin/ruff format --check host tests tools benchmarks research
 	$(VENV)/bin/mypy
 	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 format: $(VENV)/.installed
-	$(VENV)/bin/ruff format host tests tools benchmarks
-	$(VENV)/bin/ruff check --fix host tests tools benchmarks
+	$(VENV)/bin/ruff format host tests tools benchmarks research
+	$(VENV)/bin/ruff check --fix host tests tools benchmarks research
 	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)

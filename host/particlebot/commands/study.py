@@ -98,6 +98,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     modes = parser.add_argument_group("instead of running")
     modes.add_argument("--list", action="store_true", help="show the runs and how many are done")
     modes.add_argument("--report-only", action="store_true", help="report what has finished")
+    modes.add_argument(
+        "--pool",
+        nargs="+",
+        metavar="SUMMARY",
+        help="pool summary.csv files of disjoint runs cell by cell into --results DIR's "
+        "summary.csv (without --results: print it)",
+    )
     parser.add_argument("--verbose", action="store_true", help="show Dask's own log messages")
 
 
@@ -155,6 +162,8 @@ def run(
 def _study(
     study: Study, args: argparse.Namespace, runner: Runner | None, stream: TextIO | None
 ) -> int:
+    if args.pool:
+        return _pool(study, [Path(p) for p in args.pool], args.results)
     options = options_from(study, args)
     specs = study.specs(options)
     default = f"results/{study.name}" + ("-quick" if options.quick else "")
@@ -213,6 +222,30 @@ def _study(
             file=sys.stderr,
         )
         return 1
+    return 0
+
+
+def _pool(study: Study, summaries: Sequence[Path], results: str | None) -> int:
+    """Pools the summaries into one (studies/pooling.py), checked to be this study's."""
+    from particlebot.studies.pooling import PoolingError, pool_summaries
+    from particlebot.studies.report import csv_text
+
+    try:
+        text = pool_summaries(summaries)
+    except PoolingError as exc:
+        return fail(f"study {study.name}: --pool: {exc}")
+    if text.partition("\n")[0] != csv_text(study, []).partition("\n")[0]:
+        return fail(f"study {study.name}: --pool: {summaries[0]} is not a summary of this study")
+    if results is None:
+        sys.stdout.write(text)
+        return 0
+    target = Path(results) / "summary.csv"
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomically(target, text)
+    except OSError as exc:
+        return fail(f"cannot write {target}: {exc.strerror or exc}")
+    print(f"Pooled {len(summaries)} summaries: {target}")
     return 0
 
 

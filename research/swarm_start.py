@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from particlebot.sim.world import PhysicsParams
-from rattle_share import FAST_M_S, published_swarm  # (tools/, beside this script)
+from rattle_share import FAST_M_S, published_swarm  # (beside this script)
 
 TOUCH_M = 0.002
 """Neighbours closer than this gap count as touching (the magnets' blend gap, rounded up)."""
@@ -122,7 +122,7 @@ def main() -> int:
     )  # fmt: skip
     parser.add_argument("--until", type=float, default=300.0,
                         help="last time sampled (s, up to 600)")  # fmt: skip
-    parser.add_argument("--out", type=Path, default=Path("docs/studies/swarm-start.csv"))
+    parser.add_argument("--out", type=Path, default=Path("data/studies/swarm-start.csv"))
     parser.add_argument("--plot", type=Path, help="also draw the timeline here (PNG)")
     parser.add_argument("--replot", type=Path, metavar="CSV",
                         help="only draw --plot from a CSV this tool wrote")  # fmt: skip

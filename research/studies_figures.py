@@ -5,10 +5,12 @@ speed against size and against the contact shear, Fig. S18 (gap success against 
 sizes on one plot) and Fig. S20 relative to the noise-free speed. Folders that are missing are
 left out of the figures.
 
-A folder that is not there is read from the summary docs/studies keeps of it (DOCS_SUMMARIES),
-so every figure but the dashpot's (whose runs are kept in another form) redraws from a clone:
+A folder that is not there is read from the summary data/studies keeps of it (KEPT_SUMMARIES),
+as are the CSVs of the research scripts the figures draw beside the studies (rattling, the
+first seconds, packing), so every figure but the dashpot's (whose runs are kept in another form)
+redraws from a clone:
 
-    tools/studies_figures.py docs/studies docs/studies \
+    research/studies_figures.py data/studies docs/studies \
         --figures dead,speed,shear,placement,gap,noise
 """
 
@@ -31,11 +33,14 @@ import matplotlib.pyplot as plt
 from particlebot.sim.world.params import PhysicsParams
 from particlebot.studies import published as paper
 
+DATA = Path(__file__).resolve().parents[1] / "data" / "studies"
+"""The study results the repository keeps (data/studies/README.md says how each was made)."""
+
 Cells = dict[int, list[tuple[float, float, float, int]]]
 """particles -> [(sweep value, mean, sd, runs)] of one metric, sorted by the sweep value."""
 
 
-DOCS_SUMMARIES = {
+KEPT_SUMMARIES = {
     "dead-small": "dead-10-100.csv",
     "dead-high": "dead-10-100-high.csv",
     "dead-1000": "dead-1000.csv",
@@ -64,17 +69,19 @@ DOCS_SUMMARIES = {
     **{f"gap-{n}": f"gap-{n}.csv" for n in (10, 100, 1000)},
     **{f"noise-{n}": f"noise-{n}.csv" for n in (100, 1000, 10000)},
 }
-"""Study folder -> the file in docs/studies that keeps its summary.csv (a file may keep several
+"""Study folder -> the file in data/studies that keeps its summary.csv (a file may keep several
 folders' cells: the folders of one study run in parts). Checked: drawn from these, every figure
 but the dashpot's came out byte for byte as drawn from the folders."""
 
 
 def read(folder: Path, metric: str) -> Cells:
     """One metric of a study folder's summary.csv, or of the file in the folder's parent that
-    keeps it (DOCS_SUMMARIES); empty when neither is there."""
+    keeps it (KEPT_SUMMARIES), or of the one data/studies keeps; empty when none is there."""
     path = folder / "summary.csv"
-    if not path.is_file() and folder.name in DOCS_SUMMARIES:
-        path = folder.parent / DOCS_SUMMARIES[folder.name]
+    if not path.is_file() and folder.name in KEPT_SUMMARIES:
+        path = folder.parent / KEPT_SUMMARIES[folder.name]
+        if not path.is_file():
+            path = DATA / KEPT_SUMMARIES[folder.name]
     cells: Cells = defaultdict(list)
     if not path.is_file():
         return cells
@@ -106,7 +113,7 @@ PUBLISHED_DEAD = (
     "dead-high",
     "dead-1000",
     "dead-1000-high",
-    "dead-10000-all",  # 0-80 % dead, every seed run (docs: the pooled summary)
+    "dead-10000-all",  # 0-80 % dead, every seed run (data/studies: the pooled summary)
 )
 """Study folders of Table S3 with the published numbers (the first to hold a cell gives it)."""
 
@@ -351,7 +358,7 @@ def speed_figure(results: Path, out: Path) -> list[Path]:
 
 def rattle_panel(ax: plt.Axes, rattle_csv: Path, swept: str, xlabel: str) -> None:
     """The share of particles that rattle against the number `swept` (a column of
-    tools/rattle_share.py's CSV), one line per size; the panel is left blank without the CSV."""
+    research/rattle_share.py's CSV), one line per size; the panel is left blank without the CSV."""
     if not rattle_csv.is_file():
         ax.set_axis_off()
         return
@@ -367,7 +374,7 @@ def rattle_panel(ax: plt.Axes, rattle_csv: Path, swept: str, xlabel: str) -> Non
                     color=COLOURS.get(n, "tab:gray"), label=f"{n:,}")  # fmt: skip
     ax.set_xlabel(xlabel)
     ax.set_ylabel("particles faster than 0.1 m/s (%)")
-    ax.set_title("Rattling, minutes 5-7 of one run (tools/rattle_share.py)", fontsize=10)
+    ax.set_title("Rattling, minutes 5-7 of one run (research/rattle_share.py)", fontsize=10)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, title="particles", title_fontsize=8)
 
@@ -386,14 +393,14 @@ shear=S`)."""
 
 def shear_figure(results: Path, out: Path) -> list[Path]:
     """Speed at 0 % dead against the shear (torque limit 0.7) for each size, beside Table S3's
-    band, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
+    band, and the share of particles that rattle (research/rattle_share.py's CSV, data/studies)."""
     by_size: dict[int, list[tuple[float, float, float, int]]] = defaultdict(list)
     for shear, names in SHEAR_SETS.items():
         for n, (_, mean, sd, runs) in zero_cells(results, names).items():
             by_size[n].append((shear, mean, sd, runs))
     if not by_size:
         return []
-    rattle_csv = out / "rattle-shear.csv"
+    rattle_csv = DATA / "rattle-shear.csv"
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), dpi=120)
     for n, cells in sorted(by_size.items()):
         colour = COLOURS.get(n, "tab:gray")
@@ -444,7 +451,7 @@ the dashpot (`--set damping=D`; 10 is the published value)."""
 
 
 def spread_factors(path: Path) -> dict[tuple[int, float], float]:
-    """From tools/swarm_start.py's CSV: how many times its starting rms distance from the
+    """From research/swarm_start.py's CSV: how many times its starting rms distance from the
     centroid each swarm (particles, dashpot; published shear and torque limit) ends at."""
     if not path.is_file():
         return {}
@@ -462,7 +469,8 @@ def spread_factors(path: Path) -> dict[tuple[int, float], float]:
 
 def dashpot_figure(results: Path, out: Path) -> list[Path]:
     """Speed at 0 % dead against the contact dashpot at 1,000 and 10,000 particles, beside Table
-    S3's bands, and the share of particles that rattle (tools/rattle_share.py's CSV in `out`)."""
+    S3's bands, and the share of particles that rattle (research/rattle_share.py's CSV in
+    data/studies)."""
     by_size: dict[int, list[tuple[float, float, float, int]]] = defaultdict(list)
     for damping, names in DASHPOT_SETS.items():
         for n, (_, mean, sd, runs) in zero_cells(results, names).items():
@@ -470,7 +478,7 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
                 by_size[n].append((damping, mean, sd, runs))
     if not by_size:
         return []
-    spread = spread_factors(out / "swarm-start.csv")
+    spread = spread_factors(DATA / "swarm-start.csv")
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.6), dpi=120)
     for n, cells in sorted(by_size.items()):
         colour = COLOURS.get(n, "tab:gray")
@@ -480,7 +488,7 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
                   label=f"{n:,} (seeds a point: {seeds})")  # fmt: skip
         for damping, mean, _, _ in cells:
             factor = spread.get((n, damping), 1.0)
-            if factor > 2:  # the swarm blew apart in its first seconds (tools/swarm_start.py)
+            if factor > 2:  # the swarm blew apart in its first seconds (research/swarm_start.py)
                 left.annotate(f"blown apart\n(x{factor:.0f} wider)", (damping, mean),
                               xytext=(-4, 8), textcoords="offset points", ha="right",
                               fontsize=7, color=colour)  # fmt: skip
@@ -493,14 +501,14 @@ def dashpot_figure(results: Path, out: Path) -> list[Path]:
     left.set_title("Ours (points) against Table S3 (shaded: ± 1 sd)", fontsize=10)
     left.grid(alpha=0.3)
     left.legend(fontsize=8, title="particles", title_fontsize=8)
-    rattle_panel(right, out / "rattle-damping.csv", "damping", "contact dashpot (1/s), shear 40")
+    rattle_panel(right, DATA / "rattle-damping.csv", "damping", "contact dashpot (1/s), shear 40")
     return [save(fig, out / "dashpot.png")]
 
 
 def placement_figure(results: Path, out: Path) -> list[Path]:
     """Speed against swarm size with our Algorithm 5 and the published code's placement, beside
     Table S3's 0 % column; and how the 10,000-particle swarms pack and move over their runs
-    (tools/swarm_packing.py's CSV in `out`)."""
+    (research/swarm_packing.py's CSV in data/studies)."""
     zero: dict[tuple[str, str], dict[int, tuple[float, float, float, int]]] = {}
     for key, names in PLACEMENT_SETS.items():
         zero[key] = zero_cells(results, names)
@@ -533,7 +541,7 @@ def placement_figure(results: Path, out: Path) -> list[Path]:
     left.set_title("Speed against size, by placement (2 h, first 30 min left out)", fontsize=10)
     left.grid(alpha=0.3)
     left.legend(fontsize=7)
-    packing_csv = out / "packing-10000.csv"
+    packing_csv = DATA / "packing-10000.csv"
     if packing_csv.is_file():
         with packing_csv.open(newline="") as stream:
             rows = list(csv.DictReader(stream))

@@ -2,10 +2,10 @@
 seed, a swarm of simulated particles STARTed with phototaxis on; the table of speeds and p-values
 with the paper's rows beside it, and a picture of every run.
 
-    python tools/closed_loop.py                       # 10 virtual particles, A-D, 5 seeds, 30 min
-    python tools/closed_loop.py --level emulated --particles 5 --scenario line --minutes 10 \\
+    python research/closed_loop.py                    # 10 virtual particles, A-D, 5 seeds, 30 min
+    python research/closed_loop.py --level emulated --particles 5 --scenario line --minutes 10 \\
         --seeds 1
-    python tools/closed_loop.py --jobs 2 --variant D:COUNT_TOLERANCE=40,UPDATE_INTERVAL_S=360
+    python research/closed_loop.py --jobs 2 --variant D:COUNT_TOLERANCE=40,UPDATE_INTERVAL_S=360
 
 Virtual particles run the firmware logic, emulated ones the flashed image in simavr; both in the
 2-D world, a lamp 35 cm tall (its bulb 28 cm above the photocells, SI S4A), a blob (SI Algorithm

@@ -34,7 +34,7 @@ code's sparser version of it."""
 
 def published_swarm(count: int, params: PhysicsParams, placement: str = "blob") -> World:
     """The swarm these measurements watch: seed 1, placed as `placement` names, the published
-    controller, the lamp 20 m off its -x edge (tools/swarm_start.py watches the same one)."""
+    controller, the lamp 20 m off its -x edge (swarm_start.py watches the same one)."""
     xy = PLACEMENTS[placement](count, params.r_min, np.random.default_rng(1)).xy
     lamp = Lamp(float(xy[:, 0].min()) - 20.0, float(xy[:, 1].mean()))
     return World(xy[:, 0], xy[:, 1], controller=PublishedController(), params=params,
@@ -74,7 +74,7 @@ def main() -> int:
     parser.add_argument("--settles", type=float, nargs="+", default=[300.0],
                         help="seconds before sampling (each a run of its own)")  # fmt: skip
     parser.add_argument("--window", type=float, default=120.0, help="seconds sampled")
-    parser.add_argument("--out", type=Path, default=Path("docs/studies/rattle-shear.csv"))
+    parser.add_argument("--out", type=Path, default=Path("data/studies/rattle-shear.csv"))
     args = parser.parse_args()
     if (min(args.sizes) < 3 or min(args.shears) < 0 or min(args.dampings) < 0
             or min(args.settles) < 0 or args.window < 1):  # fmt: skip

@@ -1,31 +1,34 @@
-#!/usr/bin/env python3
 """Pools studies' summary.csv files cell by cell (runs, mean and sd of disjoint sets of runs).
 
 A study's own report pools runs from their records (copy the runs/*.json of several results
-folders into one and run --report-only). This is for when only the summaries are left: the
-pooled mean and sample sd are exact, up to the six significant digits a summary keeps. The
-planned runs add up too (a summary cannot say which seeds it planned, so plans that overlap
-count twice).
-
-    tools/pool_summaries.py A/summary.csv B/summary.csv -o pooled.csv
+folders into one and report with --report-only). Pooling is for when only the summaries are
+left: the pooled mean and sample sd are exact, up to the six significant digits a summary
+keeps. The planned runs add up too (a summary cannot say which seeds it planned, so plans that
+overlap count twice). `particlebot study NAME --pool A/summary.csv B/summary.csv` runs it.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import math
-import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from particlebot.errors import ParticlebotError
 from particlebot.studies.published import Published
 from particlebot.studies.report import within_band
 
 
+class PoolingError(ParticlebotError, ValueError):
+    """A file that cannot be pooled: unreadable, not a summary, or other columns than the first."""
+
+
 @dataclass
 class Group:
+    """The runs of one cell: how many finished and were planned, their mean and sample sd."""
+
     runs: int
     planned: int
     mean: float
@@ -55,28 +58,25 @@ def _num(value: float) -> str:
     return "" if math.isnan(value) else f"{value:.6g}"
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("summaries", type=Path, nargs="+", help="summary.csv files")
-    parser.add_argument("-o", "--output", type=Path, help="where to write (default: stdout)")
-    args = parser.parse_args()
+def pool_summaries(paths: Sequence[Path]) -> str:
+    """The summary.csv text of every run the summaries at `paths` count, cell by cell, in the
+    order the cells first appear; raises PoolingError naming the file (and line) it cannot use."""
+    if not paths:
+        raise PoolingError("no summaries to pool")
     header: list[str] | None = None
     cells: dict[tuple[str, ...], tuple[Group, list[str]]] = {}
-    for path in args.summaries:
+    for path in paths:
         try:
             with path.open(newline="") as f:
                 rows = list(csv.reader(f))
         except OSError as error:
-            print(f"pool_summaries: {path}: {error.strerror}", file=sys.stderr)
-            return 2
+            raise PoolingError(f"{path}: {error.strerror or error}") from None
+        except (UnicodeDecodeError, csv.Error):
+            raise PoolingError(f"{path}: not a study's summary.csv") from None
         if not rows or "runs" not in rows[0] or "paper_mean" not in rows[0]:
-            print(f"pool_summaries: {path}: not a study's summary.csv", file=sys.stderr)
-            return 2
+            raise PoolingError(f"{path}: not a study's summary.csv")
         if header is not None and rows[0] != header:
-            print(
-                f"pool_summaries: {path}: other columns than {args.summaries[0]}", file=sys.stderr
-            )
-            return 2
+            raise PoolingError(f"{path}: other columns than {paths[0]}")
         header = rows[0]
         col = {name: i for i, name in enumerate(header)}
         key_width = col["runs"]  # everything before `runs` names the cell
@@ -86,9 +86,8 @@ def main() -> int:
                     int(row[col["runs"]]), int(row[col["planned"]]),
                     _float(row[col["mean"]]), _float(row[col["sd"]]),
                 )  # fmt: skip
-            except (ValueError, IndexError):
-                print(f"pool_summaries: {path}, line {line}: not a summary row", file=sys.stderr)
-                return 2
+            except (ValueError, IndexError, KeyError):
+                raise PoolingError(f"{path}, line {line}: not a summary row") from None
             key = tuple(row[:key_width])
             paper = [row[col["paper_mean"]], row[col["paper_sd"]]]
             if key in cells:
@@ -107,16 +106,4 @@ def main() -> int:
             [*key, group.runs, group.planned, _num(group.mean), _num(group.sd),
              paper_mean, paper_sd, band]
         )  # fmt: skip
-    if args.output:
-        try:
-            args.output.write_text(out.getvalue())
-        except OSError as error:
-            print(f"pool_summaries: {args.output}: {error.strerror}", file=sys.stderr)
-            return 2
-    else:
-        sys.stdout.write(out.getvalue())
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+    return out.getvalue()

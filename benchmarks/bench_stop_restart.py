@@ -6,7 +6,7 @@ called confirmed while a particle still moves, over many seeds, with and without
 For each seed a session starts a run on virtual particles and is closed (the console quit, the
 laptop rebooted); a new session, which has heard nobody, sends STOP at once. Its verdict is set
 against what the particles' logic really does. Prints one line per particle count and grace
-period, for README ("Who must confirm a STOP"); tests/host/test_swarm_roster.py runs 50 seeds.
+period, for README ("Who must confirm a STOP"); tests/swarm/test_roster.py runs 50 seeds.
 """
 
 from __future__ import annotations

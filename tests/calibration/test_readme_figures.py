@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 
 from particlebot.cli import main
+from tests.support.repo import REPO_ROOT
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = REPO_ROOT / "README.md"
 
 
 def section() -> str:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+from tests.support.repo import REPO_ROOT
+
 VECTORS = REPO_ROOT / "shared" / "vectors.toml"
 DEFINITION = REPO_ROOT / "shared" / "protocol.toml"
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from pathlib import Path
 
 import pytest
 
 from particlebot.sim.particles.emulated.harness import default_elf, default_harness
+from tests.support.repo import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = REPO_ROOT
 
 
 def avr_tools_missing() -> str | None:

@@ -26,8 +26,9 @@ from particlebot.studies.engine import (
 )
 from particlebot.studies.progress import Progress
 from particlebot.studies.spec import RunSpec
-from particlebot.studies.standin import StandInRunner
 from particlebot.studies.store import ResultStore
+from tests.support.repo import REPO_ROOT
+from tests.support.standin import StandInRunner
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -112,7 +113,7 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from pathlib import Path\n"
         "from particlebot.commands.study import main\n"
-        "from particlebot.studies.standin import StandInRunner\n"
+        "from tests.support.standin import StandInRunner\n"
         f"runner = StandInRunner(hold_after=3, ticket_dir=Path({str(tickets)!r}))\n"
         "sys.exit(main(sys.argv[1:], runner=runner))\n"
     )
@@ -124,6 +125,7 @@ def test_an_interrupted_study_keeps_what_finished_and_resumes_with_the_rest(
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        cwd=REPO_ROOT,  # (the stand-in runner lives in tests/support, importable from the root)
     )
     deadline = time.monotonic() + 60
     while len(finished(results)) < 3:

@@ -14,8 +14,9 @@ import pytest
 
 from particlebot.cli import main
 from particlebot.sim.world.world import PARALLEL_FROM
+from tests.support.repo import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = REPO_ROOT
 SUMMARY_KEYS = {
     "particles", "steps", "wall_s", "particle_steps_per_s", "realtime_factor", "centroid_start",
     "centroid_end", "distance_to_light_start", "distance_to_light_end",

@@ -14,8 +14,9 @@ from particlebot.sim.scenarios.published_cfg import (
 )
 from particlebot.sim.scenarios.scenario import PlacementKind, ScenarioError
 from particlebot.sim.world.light import ShadowMode
+from tests.support.repo import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = REPO_ROOT
 
 GAP = """# Camera height: display only
 camera_y

@@ -19,8 +19,9 @@ from particlebot.sim.scenarios.scenario import (
 from particlebot.sim.scenarios.toml_file import key_lines, parse_scenario, read_scenario
 from particlebot.sim.scenarios.write import to_toml
 from particlebot.sim.world.light import ShadowMode
+from tests.support.repo import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = REPO_ROOT
 EXAMPLES = sorted((REPO / "scenarios").glob("*.toml"))
 
 

@@ -8,7 +8,7 @@ import time
 import pytest
 
 from particlebot.sim.swarm.pacing import PacedRunner
-from tests.host.fakes import wait_until
+from tests.support.fakes import wait_until
 
 STEP_S = 0.005
 

@@ -14,8 +14,8 @@ from particlebot.sim.particles.native import FirmwareParticle, native_factory
 from particlebot.sim.scenarios import presets
 from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.tracker import SwarmTracker
-from tests.host.fakes import wait_until
 from tests.sim.particles.native.delegate import Delegate
+from tests.support.fakes import wait_until
 
 
 def test_method_d_gives_every_particle_its_rank_by_distance_and_stop_is_confirmed() -> None:

@@ -18,7 +18,7 @@ from particlebot.protocol import BASE_STATION_ID, DEFINITION_HASH, Param, SetPar
 from particlebot.provision import identity
 from particlebot.sim.particles.emulated.boot import boot_and_ping
 from particlebot.sim.particles.emulated.harness import default_elf
-from tests.host.caterina_emulator import CaterinaEmulator
+from tests.support.caterina_emulator import CaterinaEmulator
 
 pytestmark = [
     pytest.mark.usefixtures("built_images"),

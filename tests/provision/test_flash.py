@@ -32,8 +32,8 @@ from particlebot.provision.boards import (
 )
 from particlebot.provision.flashing import Flasher, FlashPlan, Timing, summary
 from particlebot.provision.image import FirmwareImage, ImageError, parse_intel_hex
-from tests.host.caterina_emulator import CaterinaEmulator
-from tests.host.usb_bench import BenchBoard, FakeClock, UsbBench
+from tests.support.caterina_emulator import CaterinaEmulator
+from tests.support.usb_bench import BenchBoard, FakeClock, UsbBench
 
 needs_avrdude = pytest.mark.skipif(
     shutil.which("avrdude") is None, reason="avrdude is not installed (`make system-deps`)"

@@ -21,7 +21,7 @@ from particlebot.protocol import (
 from particlebot.radio import InvalidRadioUrlError
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.sim.swarm import SimSwarm, SwarmConfig
-from tests.host.truth import true_states
+from tests.support.truth import true_states
 
 LOSSY = "virtual://6?speed=max&loss=0.2&seed=2"
 

@@ -16,8 +16,8 @@ from particlebot.cli import main
 from particlebot.fleet import Fleet, FleetKey, ParticleRecord, create_fleet, load_fleet
 from particlebot.provision.xbee_setup import RadioPlan, RadioSetupError, Role, XBeeSetup
 from particlebot.radio import NoResponseError
-from tests.host.ptys import VanishingPty
-from tests.host.xbee_emulator import XBeeEmulator
+from tests.support.ptys import VanishingPty
+from tests.support.xbee_emulator import XBeeEmulator
 
 KEY = FleetKey.from_hex("000102030405060708090A0B0C0D0E0F")
 GUARD_S = 0.15  # the emulator's guard time is 0.1 s; a real radio's 1 s

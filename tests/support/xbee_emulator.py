@@ -11,7 +11,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tests.host.ptys import VanishingPty
+from tests.support.ptys import VanishingPty
 
 _ESCAPED = frozenset({0x7E, 0x7D, 0x11, 0x13})
 

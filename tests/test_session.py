@@ -9,7 +9,7 @@ from particlebot.protocol import DropReason, Ping, State, Stop, encode_frame
 from particlebot.radio import LinkState, RadioError
 from particlebot.session import Listener, ReceivedFrame, SentFrame, Session
 from particlebot.swarm.tracker import SwarmTracker
-from tests.host.fakes import FakeRadio, Recorder, status_frame, wait_until
+from tests.support.fakes import FakeRadio, Recorder, status_frame, wait_until
 
 
 def test_frames_reach_every_listener_in_order(fake_radio: FakeRadio) -> None:

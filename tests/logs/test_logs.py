@@ -32,8 +32,8 @@ from particlebot.protocol import (
 from particlebot.radio import Packet, ReadOnlyRadioError
 from particlebot.radio.serial import SerialRadio
 from particlebot.session import Note, ReceivedFrame, Session
-from tests.host.fakes import FakeRadio, ManualClock, Recorder, status_frame, wait_until
-from tests.host.ptys import VanishingPty
+from tests.support.fakes import FakeRadio, ManualClock, Recorder, status_frame, wait_until
+from tests.support.ptys import VanishingPty
 
 
 def record_session(radio: FakeRadio, path: Path) -> Recorder:

@@ -9,7 +9,7 @@ import pytest
 from particlebot.console.commands import CommandError, execute, help_text
 from particlebot.protocol import BROADCAST_ID, Param, Ping, SetId, SetParam, Start, State
 from particlebot.swarm.api import Swarm
-from tests.host.fakes import FakeRadio, status_frame, wait_until
+from tests.support.fakes import FakeRadio, status_frame, wait_until
 
 
 @pytest.fixture

@@ -24,7 +24,7 @@ from particlebot.protocol import (
 from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
 from particlebot.swarm.tracker import Campaign, IdInUseError, Rename, SwarmTracker
-from tests.host.fakes import ManualClock, status_frame
+from tests.support.fakes import ManualClock, status_frame
 
 
 class Sink:

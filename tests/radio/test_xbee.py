@@ -19,7 +19,7 @@ from particlebot.radio import (
     open_radio,
 )
 from particlebot.radio.xbee import XBeeRadio
-from tests.host.xbee_emulator import XBeeEmulator
+from tests.support.xbee_emulator import XBeeEmulator
 
 # Short probe and guard times: the emulator's guard time is 0.1 s, a real radio's 1 s.
 FAST = "timeout=0.5&probe=0.3&guard=0.15&retry=0.05"

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from particlebot.cli import main
-from tests.host.fakes import status_frame
+from tests.support.fakes import status_frame
 
 NOT_ROOT = pytest.mark.skipif(
     hasattr(os, "geteuid") and os.geteuid() == 0, reason="root may write to read-only folders"

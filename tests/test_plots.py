@@ -22,7 +22,7 @@ from particlebot.plots import (
 )
 from particlebot.protocol import Method, Start, State, Stop, decode_frame, encode_frame
 from particlebot.session import Note, ReceivedFrame, SentFrame
-from tests.host.fakes import status_message
+from tests.support.fakes import status_message
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from particlebot.provision.boards import BoardMode, BoardPort
-from tests.host.caterina_emulator import CaterinaEmulator
+from tests.support.caterina_emulator import CaterinaEmulator
 
 SOCKET = "1-1.4:1.0"
 

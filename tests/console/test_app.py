@@ -17,7 +17,7 @@ from particlebot.fleet import Fleet, ParticleRecord
 from particlebot.protocol import DEFINITION_HASH, Method, Start, State, Stop
 from particlebot.swarm.api import Swarm
 from particlebot.swarm.roster import ParticleRow
-from tests.host.fakes import FakeRadio, status_frame, wait_until
+from tests.support.fakes import FakeRadio, status_frame, wait_until
 
 
 def run_app(

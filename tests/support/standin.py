@@ -1,4 +1,4 @@
-"""A cheap, deterministic stand-in for the simulator behind the same Runner interface, for tests."""
+"""A cheap, deterministic stand-in for the simulator behind the Runner interface of studies."""
 
 from __future__ import annotations
 

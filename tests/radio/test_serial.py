@@ -22,8 +22,8 @@ from particlebot.radio._port import translate_open_error
 from particlebot.radio.faults import FaultyRadio
 from particlebot.radio.serial import SerialRadio, contains_api_frame
 from particlebot.swarm.api import Swarm
-from tests.host.ptys import VanishingPty
-from tests.host.xbee_emulator import api_frame
+from tests.support.ptys import VanishingPty
+from tests.support.xbee_emulator import api_frame
 
 
 @pytest.fixture

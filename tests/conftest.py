@@ -1,10 +1,10 @@
-"""Fixtures of the host tests."""
+"""Fixtures any test may use: a recorder of what a session hands on, a manual clock, a radio."""
 
 from __future__ import annotations
 
 import pytest
 
-from tests.host.fakes import FakeRadio, ManualClock, Recorder
+from tests.support.fakes import FakeRadio, ManualClock, Recorder
 
 
 @pytest.fixture

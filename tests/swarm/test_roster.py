@@ -13,7 +13,7 @@ from particlebot.fleet import Fleet, ParticleRecord, load_fleet, save_fleet
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.sim.swarm import SimSwarm, SwarmConfig
 from particlebot.swarm.roster import STOPPED_STATES
-from tests.host.truth import true_states
+from tests.support.truth import true_states
 
 SEEDS = 50
 HALF_LOSS = 0.5

@@ -14,11 +14,13 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev clang
 
 .PHONY: help demo test system-deps venv generate check-generated native native-asan cpp-test \
-        fuzz firmware firmware-faults harness lint format pytest bench clean
+        fuzz firmware firmware-faults harness lint format pytest check bench clean
 
 help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
 	@echo "make test      set everything up and run every check (lint, C++ tests, pytest, simavr)"
+	@echo "make check     the fast tier for the edit-test loop: C++ tests and pytest without the"
+	@echo "               simavr, dask, e2e and slow tiers (about a minute)"
 	@echo "make firmware  build build/firmware/particle.elf and .hex with Debian's avr-gcc"
 	@echo "make bench     run the benchmarks in benchmarks/ whose figures README reports"
 
@@ -276,6 +278,12 @@ pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 	$(VENV)/bin/pytest -q --ignore=tests/firmware tests
 
 test: system-deps venv check-generated lint cpp-test fuzz pytest
+
+# The fast tier (pyproject.toml names the markers): what an edit is checked with before
+# `make test` runs every tier. The firmware-logic tests run against the release library here.
+FAST_TIER := not (simavr or dask or e2e or slow)
+check: $(VENV)/.installed native cpp-test
+	$(VENV)/bin/pytest -q -m '$(FAST_TIER)' tests
 
 demo: system-deps venv native
 	$(VENV)/bin/particlebot demo

@@ -250,6 +250,7 @@ def test_read_records_refuses_a_directory_without_a_traceback(tmp_path: Path) ->
         read_records(tmp_path)
 
 
+@pytest.mark.e2e
 def test_the_headless_demo_writes_its_plot_and_its_film_next_to_its_log(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -14,6 +14,8 @@ from tests.support.repo import REPO_ROOT
 
 README = REPO_ROOT / "README.md"
 
+pytestmark = pytest.mark.e2e
+
 
 def code_block(language: str, section: str = "## Experiments as code") -> str:
     """The first ```language block after the section's heading."""

@@ -21,6 +21,7 @@ from particlebot.radio.virtual import VirtualRadio
 from particlebot.swarm.api import Swarm
 
 
+@pytest.mark.e2e
 def test_the_demo_without_a_terminal_prints_the_runs_table_s2_figures_and_json_last(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

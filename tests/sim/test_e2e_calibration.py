@@ -26,7 +26,7 @@ from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.swarm.api import Swarm
 from tests.sim.particles.emulated.test_smoke import SERVO_JITTER_US
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 DEFAULT_TABLE = [PARAM_SPECS[p].default for p in TABLE_PARAMS]
 

@@ -53,6 +53,7 @@ def test_a_missing_firmware_image_is_reported_with_the_command_that_builds_it() 
         open_radio("emulated://2?elf=build/firmware/no-such-image.elf")
 
 
+@pytest.mark.e2e
 @pytest.mark.usefixtures("built_images")
 def test_the_swarm_api_finds_starts_and_stops_emulated_particles_at_20_percent_loss() -> None:
     # speed=max: the calls below step the emulated swarm themselves, as fast as it runs.
@@ -75,6 +76,7 @@ def test_the_swarm_api_finds_starts_and_stops_emulated_particles_at_20_percent_l
         assert all(p.state == State.IDLE for p in swarm.particles())
 
 
+@pytest.mark.e2e
 @pytest.mark.usefixtures("built_images")
 def test_an_experiment_runs_on_emulated_particles_and_says_how_far_they_moved(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]

@@ -30,7 +30,7 @@ from particlebot.sim.particles.emulated.servo import (
 from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import BaseStation
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 STEP_S = servo_step_s()  # one servo step, as the firmware defines it
 COUNT = 5

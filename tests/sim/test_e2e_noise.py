@@ -29,7 +29,7 @@ from particlebot.sim.particles.emulated.servo import missed_frames, period_error
 from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import BaseStation
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 COUNT = 5
 ROUND_MS = 1000

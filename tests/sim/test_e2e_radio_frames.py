@@ -22,7 +22,7 @@ from particlebot.sim.clock import CPU_HZ
 from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import BaseStation
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 SLOT_S = 0.060
 """A broadcast PING is answered in a random one of these slots (a STATUS takes 56 ms at 9600)."""

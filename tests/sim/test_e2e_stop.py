@@ -31,7 +31,7 @@ from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import packet_frames
 from particlebot.swarm.tracker import SwarmTracker
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 COUNT = 5
 CYCLE_STEPS = 75

@@ -19,7 +19,7 @@ from particlebot.protocol import (
 from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import BaseStation
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 COUNT = 3
 HUNG = 1  # index of the particle running the fault-injection build

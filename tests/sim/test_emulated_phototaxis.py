@@ -1,6 +1,6 @@
 """The flashed image finds the lamp: five emulated particles (particle.elf in simavr) in a line
 1.5 m from a lamp, STARTed with phototaxis on through emulated://, crawl toward it in the world.
-(tools/closed_loop.py --level emulated runs the same for ten minutes; README has the figures.)"""
+(research/closed_loop.py --level emulated runs the same for ten minutes; README has the figures.)"""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from particlebot.logs.world import read_world
 from particlebot.plots import read_records
 from particlebot.swarm.api import Swarm
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 URL = "emulated://5?speed=max&scenario=line&start=1.5&seed=3"
 

@@ -21,7 +21,7 @@ from particlebot.sim.scenarios.scenario import ControllerKind, ControllerSpec
 from particlebot.sim.swarm import Level, SimSwarm, SwarmConfig
 from particlebot.sim.swarm.base import BaseStation
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 # A blob of four touching particles (SI Algorithm 5, seeded), half a metre from the lamp; method
 # D at T = 1.5 s: the round (3 s), then waves of T + t_p = 1.5 s + 3 x 0.75 s, six in all.

@@ -30,7 +30,7 @@ from particlebot.studies.store import ResultStore
 from tests.support.repo import REPO_ROOT
 from tests.support.standin import StandInRunner
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.dask]
 
 QUICK_DEAD = ["dead", "--quick", "--sizes", "10,100", "--fractions", "0,0.5", "--seeds", "2"]
 

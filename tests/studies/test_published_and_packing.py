@@ -72,7 +72,7 @@ def test_tables_s5_and_s6_agree_and_their_gaps_are_fractions_of_the_dpd() -> Non
 
 @pytest.mark.parametrize(
     ("n", "optimum"),
-    [(3, 1 + 2 / math.sqrt(3)), (10, 3.813026)],
+    [(3, 1 + 2 / math.sqrt(3)), pytest.param(10, 3.813026, marks=pytest.mark.slow)],
 )
 def test_small_packings_reach_the_known_optima(n: int, optimum: float) -> None:
     assert compute_densest_packing(n) == pytest.approx(optimum, abs=2e-4)

@@ -141,6 +141,7 @@ def test_a_setup_no_turn_can_clear_is_one_line_naming_the_swarm() -> None:
         seam.frame(replace(WALLED, placement="spiral"))
 
 
+@pytest.mark.slow
 def test_a_retried_run_resumes_from_its_folder_and_ends_as_an_uninterrupted_one(
     tmp_path: Path,
 ) -> None:
@@ -184,6 +185,7 @@ def test_every_study_runs_on_the_simulator_at_a_tiny_size(name: str) -> None:
         assert record.metrics["robot_size_ratio"] > 0
 
 
+@pytest.mark.dask
 def test_a_tiny_study_runs_end_to_end_on_the_simulator_and_two_workers(tmp_path: Path) -> None:
     results = tmp_path / "results"
     argv = ["dead", "--sizes", "10", "--fractions", "0,0.8", "--seeds", "2", "--duration", "10min"]
@@ -205,6 +207,7 @@ def test_a_tiny_study_runs_end_to_end_on_the_simulator_and_two_workers(tmp_path:
     assert {p.name: p.stat().st_mtime_ns for p in (results / "runs").iterdir()} == before
 
 
+@pytest.mark.dask
 def test_a_study_started_from_the_command_line_runs_each_run_on_one_thread(
     tmp_path: Path,
 ) -> None:

@@ -26,6 +26,7 @@ from tests.support.truth import true_states
 LOSSY = "virtual://6?speed=max&loss=0.2&seed=2"
 
 
+@pytest.mark.slow
 def test_the_issue_example_runs_in_simulated_time_under_loss(tmp_path: Path) -> None:
     wall = time.monotonic()
     with particlebot.Swarm.open(LOSSY, log_dir=tmp_path) as swarm:

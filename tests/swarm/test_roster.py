@@ -42,6 +42,7 @@ def restart_and_stop(seed: int, count: int = 6) -> tuple[bool, list[State]]:
     return report.confirmed, true_states(world)
 
 
+@pytest.mark.slow
 def test_stop_right_after_a_restart_at_half_loss_is_never_confirmed_falsely() -> None:
     confirmed = false = 0
     for seed in range(1, SEEDS + 1):

@@ -21,7 +21,7 @@ from particlebot.protocol import (
 from particlebot.sim.particles.emulated.harness import ParticleSim
 from tests.sim.particles.emulated.test_smoke import SERVO_JITTER_US, Base
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 CONTRACTED_US = PARAM_SPECS[Param.SERVO_CAL_0].default
 FRAME_S = 0.020

@@ -23,7 +23,7 @@ from particlebot.sim.clock import CPU_HZ
 from particlebot.sim.particles.emulated.harness import ParticleSim, ServoPulse
 from particlebot.sim.particles.emulated.servo import cycle_profile_us, servo_step_s
 
-pytestmark = pytest.mark.usefixtures("built_images")
+pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]
 
 PARTICLE_ID = 1
 ROUND_MS = 200

@@ -14,13 +14,14 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev clang
 
 .PHONY: help demo test system-deps venv generate check-generated native native-asan cpp-test \
-        fuzz firmware firmware-faults harness lint format pytest bench clean
+        fuzz firmware firmware-faults harness lint format pytest bench docs docs-check clean
 
 help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
 	@echo "make test      set everything up and run every check (lint, C++ tests, pytest, simavr)"
 	@echo "make firmware  build build/firmware/particle.elf and .hex with Debian's avr-gcc"
 	@echo "make bench     run the benchmarks whose figures README reports"
+	@echo "make docs      build the documentation site into build/site (open build/site/index.html)"
 
 # ---- setup ------------------------------------------------------------------------------------
 
@@ -275,7 +276,17 @@ pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 	  $(VENV)/bin/pytest -q tests/firmware
 	$(VENV)/bin/pytest -q --ignore=tests/firmware tests
 
-test: system-deps venv check-generated lint cpp-test fuzz pytest
+# ---- documentation site (mkdocs.yml, sources in docs/) --------------------------------------------
+# --strict turns a broken link, a missing page or a command whose --help no page shows into an error.
+
+docs: $(VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+	@echo "the site is in $(BUILD)/site: open $(BUILD)/site/index.html"
+
+docs-check: $(VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet --site-dir $(BUILD)/site-check
+
+test: system-deps venv check-generated lint cpp-test fuzz docs-check pytest
 
 demo: system-deps venv native
 	$(VENV)/bin/particlebot demo

@@ -1,4 +1,5 @@
-"""mkdocs hook: each command page shows its command's --help, generated at build time.
+"""mkdocs hook: each command page shows its command's --help, generated at build time, and the
+protocol page shows the messages and parameters of the generated protocol module.
 
 A page marks where a help text goes with `<!-- particlebot-help: simulate -->` (or a subcommand:
 `<!-- particlebot-help: fleet init -->`). After the build, every command of the CLI must have a
@@ -19,6 +20,8 @@ from mkdocs.exceptions import PluginError
 
 MARKER = re.compile(r"<!-- particlebot-help:([a-z -]*?) ?-->")
 WIDTH = "96"  # argparse wraps to $COLUMNS; fixed so the pages do not depend on the terminal
+
+PROTOCOL = re.compile(r"<!-- particlebot-protocol: (messages|params) -->")
 
 _used: set[tuple[str, ...]] = set()
 
@@ -70,7 +73,37 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
         command = " ".join(("particlebot", *path))
         return f"```text\n$ {command} --help\n{text}\n```"
 
-    return MARKER.sub(help_block, markdown)
+    markdown = MARKER.sub(help_block, markdown)
+    return PROTOCOL.sub(lambda found: _protocol_table(found.group(1)), markdown)
+
+
+def _cell(text: str) -> str:
+    return " ".join(text.split()).replace("|", "\\|")
+
+
+def _protocol_table(which: str) -> str:
+    """A table from the generated module: the values the firmware defines, never copied by hand."""
+    _parser()  # puts host/ on the path
+    from particlebot.protocol import generated
+
+    if which == "params":
+        rows = ["| parameter | default | range | meaning |", "| --- | ---: | --- | --- |"]
+        for param, spec in generated.PARAM_SPECS.items():
+            rows.append(
+                f"| `{param.name}` | {spec.default} | {spec.min}-{spec.max} "
+                f"| {_cell(spec.description)} |"
+            )
+        return "\n".join(rows)
+    rows = ["| TYPE | message | what it does |", "| ---: | --- | --- |"]
+    messages = [
+        cls
+        for cls in vars(generated).values()
+        if isinstance(cls, type) and issubclass(cls, generated.Message) and cls is not generated.Message
+    ]
+    for cls in sorted(messages, key=lambda cls: int(cls.MESSAGE_TYPE)):
+        doc = (cls.__doc__ or "").split(":", 1)[-1]
+        rows.append(f"| 0x{int(cls.MESSAGE_TYPE):02X} | {cls.MESSAGE_TYPE.name} | {_cell(doc)} |")
+    return "\n".join(rows)
 
 
 def on_post_build(config: Any) -> None:

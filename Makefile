@@ -257,14 +257,14 @@ harness: $(BUILD)/.system-deps $(BUILD)/sim/particle_sim
 # ---- checks -------------------------------------------------------------------------------------
 
 lint: $(VENV)/.installed $(BUILD)/.system-deps
-	$(VENV)/bin/ruff check host tests tools
-	$(VENV)/bin/ruff format --check host tests tools
+	$(VENV)/bin/ruff check host tests tools docs/_hooks
+	$(VENV)/bin/ruff format --check host tests tools docs/_hooks
 	$(VENV)/bin/mypy
 	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 format: $(VENV)/.installed
-	$(VENV)/bin/ruff format host tests tools
-	$(VENV)/bin/ruff check --fix host tests tools
+	$(VENV)/bin/ruff format host tests tools docs/_hooks
+	$(VENV)/bin/ruff check --fix host tests tools docs/_hooks
 	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)

@@ -98,7 +98,9 @@ def _protocol_table(which: str) -> str:
     messages = [
         cls
         for cls in vars(generated).values()
-        if isinstance(cls, type) and issubclass(cls, generated.Message) and cls is not generated.Message
+        if isinstance(cls, type)
+        and issubclass(cls, generated.Message)
+        and cls is not generated.Message
     ]
     for cls in sorted(messages, key=lambda cls: int(cls.MESSAGE_TYPE)):
         doc = (cls.__doc__ or "").split(":", 1)[-1]

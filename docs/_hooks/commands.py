@@ -21,7 +21,7 @@ from mkdocs.exceptions import PluginError
 MARKER = re.compile(r"<!-- particlebot-help:([a-z -]*?) ?-->")
 WIDTH = "96"  # argparse wraps to $COLUMNS; fixed so the pages do not depend on the terminal
 
-PROTOCOL = re.compile(r"<!-- particlebot-protocol: (messages|params) -->")
+PROTOCOL = re.compile(r"<!-- particlebot-protocol: (messages|params|hash) -->")
 
 _used: set[tuple[str, ...]] = set()
 
@@ -86,6 +86,8 @@ def _protocol_table(which: str) -> str:
     _parser()  # puts host/ on the path
     from particlebot.protocol import generated
 
+    if which == "hash":
+        return f"`0x{generated.DEFINITION_HASH:08X}`"
     if which == "params":
         rows = ["| parameter | default | range | meaning |", "| --- | ---: | --- | --- |"]
         for param, spec in generated.PARAM_SPECS.items():

@@ -11,7 +11,10 @@ import pytest
 
 from particlebot.cli import main
 
-PAGE = Path(__file__).resolve().parents[2] / "docs" / "calibration.md"
+ROOT = next(
+    folder for folder in Path(__file__).resolve().parents if (folder / "mkdocs.yml").is_file()
+)
+PAGE = ROOT / "docs" / "calibration.md"
 
 
 def section() -> str:

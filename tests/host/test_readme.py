@@ -12,7 +12,10 @@ import pytest
 
 from particlebot.cli import main
 
-ROOT = Path(__file__).resolve().parents[2]
+# The repository root: the folder above this file that holds mkdocs.yml (wherever tests/ puts it).
+ROOT = next(
+    folder for folder in Path(__file__).resolve().parents if (folder / "mkdocs.yml").is_file()
+)
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
 EXPERIMENTS_PAGE = DOCS / "experiments.md"

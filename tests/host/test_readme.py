@@ -79,7 +79,9 @@ def test_the_site_has_runnable_examples() -> None:
     assert {"getting-started.md", "experiments.md"} <= pages
 
 
-@pytest.mark.parametrize(("where", "code"), runnable_blocks(), ids=lambda value: str(value)[:40])
+@pytest.mark.parametrize(
+    ("where", "code"), [pytest.param(where, code, id=where) for where, code in runnable_blocks()]
+)
 def test_a_runnable_example_of_the_site_runs_as_written(
     where: str, code: str, tmp_path: Path
 ) -> None:

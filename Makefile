@@ -14,7 +14,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SYSTEM_PACKAGES := gcc-avr avr-libc binutils-avr arduino-core-avr avrdude simavr libsimavr-dev libelf-dev clang-format pkg-config g++ doctest-dev clang
 
 .PHONY: help demo test system-deps venv generate check-generated native native-asan cpp-test \
-        fuzz firmware firmware-faults harness lint format pytest check bench clean
+        fuzz firmware firmware-faults harness lint format pytest check bench docs docs-check clean
 
 help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
@@ -22,7 +22,8 @@ help:
 	@echo "make check     the fast tier for the edit-test loop: C++ tests and pytest without the"
 	@echo "               simavr, dask, e2e and slow tiers (about a minute)"
 	@echo "make firmware  build build/firmware/particle.elf and .hex with Debian's avr-gcc"
-	@echo "make bench     run the benchmarks in benchmarks/ whose figures README reports"
+	@echo "make bench     run the benchmarks in benchmarks/ whose figures the performance page reports"
+	@echo "make docs      build the documentation site into build/site (open build/site/index.html)"
 
 # ---- setup ------------------------------------------------------------------------------------
 
@@ -258,14 +259,14 @@ harness: $(BUILD)/.system-deps $(BUILD)/sim/particle_sim
 # ---- checks -------------------------------------------------------------------------------------
 
 lint: $(VENV)/.installed $(BUILD)/.system-deps
-	$(VENV)/bin/ruff check host tests tools benchmarks research
-	$(VENV)/bin/ruff format --check host tests tools benchmarks research
+	$(VENV)/bin/ruff check host tests tools benchmarks research docs/_hooks
+	$(VENV)/bin/ruff format --check host tests tools benchmarks research docs/_hooks
 	$(VENV)/bin/mypy
 	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 format: $(VENV)/.installed
-	$(VENV)/bin/ruff format host tests tools benchmarks research
-	$(VENV)/bin/ruff check --fix host tests tools benchmarks research
+	$(VENV)/bin/ruff format host tests tools benchmarks research docs/_hooks
+	$(VENV)/bin/ruff check --fix host tests tools benchmarks research docs/_hooks
 	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
 
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)
@@ -277,7 +278,17 @@ pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 	  $(VENV)/bin/pytest -q tests/firmware
 	$(VENV)/bin/pytest -q --ignore=tests/firmware tests
 
-test: system-deps venv check-generated lint cpp-test fuzz pytest
+# ---- documentation site (mkdocs.yml, sources in docs/) --------------------------------------------
+# --strict turns a broken link, a missing page or a command whose --help no page shows into an error.
+
+docs: $(VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+	@echo "the site is in $(BUILD)/site: open $(BUILD)/site/index.html"
+
+docs-check: $(VENV)/.installed
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet --site-dir $(BUILD)/site-check
+
+test: system-deps venv check-generated lint cpp-test fuzz docs-check pytest
 
 # The fast tier (pyproject.toml names the markers): what an edit is checked with before
 # `make test` runs every tier. The firmware-logic tests run against the release library here.

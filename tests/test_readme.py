@@ -1,4 +1,5 @@
-"""README's examples run as written: the Swarm API script and the experiment file, output too."""
+"""The manual's examples run as written: README's Swarm API script, every code block of the
+documentation site marked runnable, and the experiment file with the summary its page shows."""
 
 from __future__ import annotations
 
@@ -12,32 +13,57 @@ import pytest
 from particlebot.cli import main
 from tests.support.repo import REPO_ROOT
 
-README = REPO_ROOT / "README.md"
+ROOT = REPO_ROOT
+README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+EXPERIMENTS_PAGE = DOCS / "experiments.md"
 
 pytestmark = pytest.mark.e2e
 
+# A block is runnable when the line before its opening fence is this comment (invisible on the
+# site); it runs as a script of its own in an empty folder.
+RUNNABLE = re.compile(r"^<!-- runnable -->
+```python
+(.*?)^```", re.S | re.M)
 
-def code_block(language: str, section: str = "## Experiments as code") -> str:
+
+def code_block(path: Path, language: str, section: str) -> str:
     """The first ```language block after the section's heading."""
-    text = README.read_text(encoding="utf-8")
+    text = path.read_text(encoding="utf-8")
     found = re.search(rf"```{language}\n(.*?)```", text[text.index(section) :], re.S)
-    assert found, f"README has no {language} block under {section}"
+    assert found, f"{path.name} has no {language} block under {section}"
     return found.group(1)
 
 
-def test_the_api_example_runs_as_written(tmp_path: Path) -> None:
-    # As README says to run it: a file of its own, run by the environment's Python in a folder
-    # of the researcher's, outside the clone (so nothing but the installed package is imported).
-    example = tmp_path / "example.py"
-    example.write_text(code_block("python"), encoding="utf-8")
-    ran = subprocess.run(
-        [sys.executable, example.name],
-        cwd=tmp_path,
+def runnable_blocks() -> list[tuple[str, str]]:
+    """(page:line, code) of every block of the site marked runnable."""
+    blocks = []
+    for page in sorted(DOCS.rglob("*.md")):
+        text = page.read_text(encoding="utf-8")
+        for found in RUNNABLE.finditer(text):
+            line = text.count("\n", 0, found.start()) + 1
+            blocks.append((f"{page.relative_to(DOCS)}:{line}", found.group(1)))
+    return blocks
+
+
+def run_script(code: str, folder: Path) -> subprocess.CompletedProcess[str]:
+    # As the manual says to run it: a file of its own, run by the environment's Python in a
+    # folder of the researcher's, outside the clone (so nothing but the installed package is
+    # imported).
+    script = folder / "example.py"
+    script.write_text(code, encoding="utf-8")
+    return subprocess.run(
+        [sys.executable, script.name],
+        cwd=folder,
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=240,
         check=False,
     )
+
+
+def test_the_readme_api_example_runs_as_written(tmp_path: Path) -> None:
+    ran = run_script(code_block(README, "python", "## Experiments as code"), tmp_path)
     assert ran.returncode == 0, ran.stderr
     lines = ran.stdout.splitlines()
     assert re.fullmatch(
@@ -49,14 +75,32 @@ def test_the_api_example_runs_as_written(tmp_path: Path) -> None:
     assert lines[11] == f"log: {log.relative_to(tmp_path)}"
 
 
+def test_the_site_has_runnable_examples() -> None:
+    # The marker is easy to lose in an edit; the pages that show scripts keep at least these.
+    pages = {where.split(":")[0] for where, _ in runnable_blocks()}
+    assert {"getting-started.md", "experiments.md"} <= pages
+
+
+@pytest.mark.parametrize(
+    ("where", "code"), [pytest.param(where, code, id=where) for where, code in runnable_blocks()]
+)
+def test_a_runnable_example_of_the_site_runs_as_written(
+    where: str, code: str, tmp_path: Path
+) -> None:
+    ran = run_script(code, tmp_path)
+    assert ran.returncode == 0, f"{where}:\n{ran.stderr}"
+    assert ran.stdout.strip(), f"{where} printed nothing"
+
+
 def test_the_experiment_file_runs_as_written_and_prints_the_summary_shown(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    section = "## `particlebot run`: an experiment file"
     experiment = tmp_path / "experiment.toml"
-    experiment.write_text(code_block("toml"), encoding="utf-8")
+    experiment.write_text(code_block(EXPERIMENTS_PAGE, "toml", section), encoding="utf-8")
     assert main(["run", str(experiment), "--log-dir", str(tmp_path / "logs")]) == 0
     out = capsys.readouterr().out
-    text = README.read_text(encoding="utf-8")
+    text = EXPERIMENTS_PAGE.read_text(encoding="utf-8")
     table = text[text.index("trial  method  duration s") :].split("```")[0].strip()
     assert table in out  # seeded and stepped: the same figures every time
     (folder,) = (tmp_path / "logs").glob("phototaxis-*")

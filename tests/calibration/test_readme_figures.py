@@ -1,4 +1,4 @@
-"""README's calibration figures come from its own commands (seeded and stepped: the same every
+"""The calibration page's figures come from its own commands (seeded and stepped: the same every
 time): Fig. S5's row for photocell_spread=0.1, and the servo table of its transcript."""
 
 from __future__ import annotations
@@ -12,13 +12,11 @@ import pytest
 from particlebot.cli import main
 from tests.support.repo import REPO_ROOT
 
-README = REPO_ROOT / "README.md"
+PAGE = REPO_ROOT / "docs" / "calibration.md"
 
 
 def section() -> str:
-    text = README.read_text(encoding="utf-8")
-    start = text.index("### Calibrating particles")
-    return text[start : text.index("## Tests", start)]
+    return PAGE.read_text(encoding="utf-8")
 
 
 def test_the_fig_s5_row_is_what_the_readme_command_measures(

@@ -21,6 +21,7 @@ def section() -> str:
     return text[start : text.index("## Tests", start)]
 
 
+@pytest.mark.e2e
 def test_the_fig_s5_row_is_what_the_readme_command_measures(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

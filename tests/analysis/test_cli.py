@@ -154,6 +154,7 @@ def test_render_writes_a_video_its_truth_and_how_to_track_it(
     assert "write videos as .mp4 or .avi" in capsys.readouterr().err
 
 
+@pytest.mark.e2e
 def test_a_simulator_run_filmed_and_tracked_gives_the_row_its_csv_gives(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -201,6 +201,7 @@ def test_the_default_cycle_is_the_sources_own_else_the_papers_experiments() -> N
     assert analyse(series(t, x, y, lamp), StatsSettings(cycle_s=12.0)).cycle_s == 12.0
 
 
+@pytest.mark.slow
 def test_a_simulated_radios_session_log_is_a_source_with_its_lamp_and_cycle(
     tmp_path: Path,
 ) -> None:

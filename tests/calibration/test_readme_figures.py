@@ -19,6 +19,7 @@ def section() -> str:
     return PAGE.read_text(encoding="utf-8")
 
 
+@pytest.mark.e2e
 def test_the_fig_s5_row_is_what_the_readme_command_measures(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

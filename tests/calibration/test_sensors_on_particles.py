@@ -102,6 +102,7 @@ def test_calibrated_virtual_particles_follow_one_law_and_rank_themselves_right(
     assert "Reference point: particle 1 reads" in out.getvalue()
 
 
+@pytest.mark.e2e
 def test_the_command_calibrates_checks_and_writes_its_files(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

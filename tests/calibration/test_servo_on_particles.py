@@ -163,6 +163,7 @@ def test_nobody_answering_ends_the_hold(swarm: Swarm) -> None:
     assert swarm.particle(PARTICLE).state == State.IDLE  # type: ignore[union-attr]
 
 
+@pytest.mark.slow
 def test_a_hold_is_renewed_while_the_person_measures_then_let_go(swarm: Swarm) -> None:
     out = io.StringIO()
     bench = ServoBench(swarm, PARTICLE, Prompter(person(swarm)), out)
@@ -191,6 +192,7 @@ def run_command(args: list[str], answers: str, cwd: Path) -> subprocess.Complete
     )
 
 
+@pytest.mark.e2e
 def test_the_command_takes_its_answers_from_stdin_and_draws_the_table(tmp_path: Path) -> None:
     radii = "\n".join(f"{transmission(p):.1f}" for p in DEFAULT_TABLE)
     done = run_command(["2", "--radio", "virtual://3", "-o", "servo.csv"], radii + "\n\n", tmp_path)
@@ -202,6 +204,7 @@ def test_the_command_takes_its_answers_from_stdin_and_draws_the_table(tmp_path: 
     assert len(rows) == 1 + POINTS
 
 
+@pytest.mark.e2e
 def test_the_command_with_nobody_to_answer_says_so_in_one_line(tmp_path: Path) -> None:
     done = run_command(["2", "--radio", "virtual://3"], "", tmp_path)
     assert done.returncode == 2

@@ -157,6 +157,7 @@ def run_cli(*argv: str, cwd: Path) -> subprocess.Popen[str]:
     )
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_a_snapshot_and_resume_finishes_the_same_run(tmp_path: Path) -> None:
     quick = ["--particles", "20", "--dump-interval", "20", "--seed", "4"]
     # Far too long to finish before the signal, whatever the machine's load.

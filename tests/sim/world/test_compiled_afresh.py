@@ -11,6 +11,9 @@ from pathlib import Path
 
 import pytest
 
+# Each test compiles the kernels in fresh processes: minutes, so in the slow tier.
+pytestmark = pytest.mark.slow
+
 # The end of a script that ran `world`: prints a digest of every particle's position, velocity
 # and radius.
 _DIGEST = """

@@ -56,6 +56,7 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     assert flags[k.F_JOINED].any()  # free particles touching the robot
 
 
+@pytest.mark.slow
 def test_pairs_reached_through_the_grids_order_equal_pairs_after_re_ordering() -> None:
     # Between re-orderings a boiling swarm's pair pass reaches the particles through the grid's
     # order (members) wherever they are stored: from any storage order it must add up exactly
@@ -89,6 +90,7 @@ def test_pairs_reached_through_the_grids_order_equal_pairs_after_re_ordering() -
     assert (sums[True][k.B_FR] > 0).sum() > 100 and (sums[True][k.B_FA] > 0).sum() > 100
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("skin", [PhysicsParams.skin, 1e-6])
 def test_the_parallel_path_follows_the_plain_numpy_transcription_too(
     monkeypatch: pytest.MonkeyPatch, skin: float

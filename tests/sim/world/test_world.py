@@ -183,6 +183,7 @@ def test_a_firmware_run_resumes_from_a_snapshot_too(tmp_path: Path) -> None:
     assert np.array_equal(whole.radii(), resumed.radii())
 
 
+@pytest.mark.slow
 def test_float32_and_float64_move_a_line_alike() -> None:
     advances = []
     precisions: tuple[Precision, ...] = ("float64", "float32")

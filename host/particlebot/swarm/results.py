@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from particlebot.protocol import Method, Param, ParamResult, State, Status
-from particlebot.swarm.campaigns import ids_text
+from particlebot.swarm.campaigns import Verdict, ids_text
 
 
 @dataclass(frozen=True)
@@ -123,6 +123,9 @@ class StopReport:
     """From the first STOP to the outcome."""
     text: str
     """The one-line outcome the console shows."""
+    verdict: Verdict = Verdict.FAILED
+    """CONFIRMED (then `confirmed`), UNCONFIRMED (sent, but nobody can vouch for every
+    particle: nobody confirmed, or the base station had not listened long enough), or FAILED."""
 
     def __str__(self) -> str:
         return self.text

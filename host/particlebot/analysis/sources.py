@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.analysis import simcsv, trackfile
+from particlebot.errors import ParticlebotError
 from particlebot.logs import jsonl, world
 
 FloatArray = npt.NDArray[np.float64]
@@ -29,7 +30,7 @@ PUBLISHED_CYCLE_S = 12.0
 _CONFIG_MAX_BYTES = 200_000
 
 
-class SourceError(ValueError):
+class SourceError(ParticlebotError, ValueError):
     """A source the statistics cannot use, said in one line."""
 
 

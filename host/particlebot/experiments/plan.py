@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from particlebot.errors import ParticlebotError
 from particlebot.fleet import FleetFileError, load_fleet
 from particlebot.protocol import PARAM_SPECS, Method, Param
 from particlebot.radio import RadioError, parse_radio_url
@@ -54,7 +55,7 @@ _TRIAL_KEYS = {
 }
 
 
-class ExperimentFileError(Exception):
+class ExperimentFileError(ParticlebotError):
     """What is wrong with an experiment file, in one line: `FILE:LINE: key: what to write`."""
 
 

@@ -14,6 +14,7 @@ from typing import Self
 from urllib.parse import parse_qsl, urlsplit
 
 from particlebot.closing import ClosedOnExit
+from particlebot.errors import ParticlebotError
 from particlebot.options import ANY, SPEED, Bounds, OptionError, parse_float, parse_int
 
 __all__ = [
@@ -72,7 +73,7 @@ class LinkEvent:
     time: float
 
 
-class RadioError(Exception):
+class RadioError(ParticlebotError):
     """A radio problem; the message always says what to do about it."""
 
 

@@ -7,6 +7,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 
+from particlebot.errors import ParticlebotError
 from particlebot.studies import published as paper
 from particlebot.studies.measures import (
     GapPassage,
@@ -33,7 +34,7 @@ GAP_SHADOW = "last"
 defining the lowest end of the signal gradient": the simulator's shadow mode LAST."""
 
 
-class StudyOptionError(ValueError):
+class StudyOptionError(ParticlebotError, ValueError):
     """A study option the user gave is wrong; the message is one line, naming the option."""
 
 

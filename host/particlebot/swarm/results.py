@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import Method, Param, ParamResult, State, Status
 from particlebot.swarm.campaigns import Verdict, ids_text
 
@@ -131,7 +132,7 @@ class StopReport:
         return self.text
 
 
-class SwarmError(Exception):
+class SwarmError(ParticlebotError):
     """Something the swarm could not do; the message says what, and what to try."""
 
 

@@ -6,7 +6,6 @@ bad input, RuntimeError, OSError), shown in brackets; indentation shows subclass
 ParticlebotError
  +-- AnimationError (RuntimeError)        analysis.animation
  +-- GeometryError (ValueError)           analysis.geometry
- +-- SimFormatError (ValueError)          analysis.simcsv
  +-- SourceError (ValueError)             analysis.sources
  +-- TrackFormatError (ValueError)        analysis.trackfile
  +-- VideoError (ValueError)              analysis.video
@@ -23,7 +22,6 @@ ParticlebotError
  +-- FleetFileError                       fleet.store
  +-- LogError                             logs.jsonl
  |    +-- LogFormatError (ValueError)     logs.jsonl
- +-- WorldRecordError (ValueError)        logs.world
  +-- OptionError (ValueError)             options
  +-- PlotInputError (ValueError)          plots
  +-- FrameError (ValueError)              protocol.frames
@@ -32,23 +30,25 @@ ParticlebotError
  +-- BoardError                           provision.boards
  +-- IdentityError (ValueError)           provision.identity
  +-- ImageError (ValueError)              provision.image
- +-- RadioError                           radio
- |    +-- InvalidRadioUrlError            radio
- |    +-- NoResponseError                 radio
- |    +-- PortBusyError                   radio
- |    +-- PortLostError                   radio
- |    +-- PortNotFoundError               radio
- |    +-- PortPermissionError             radio
- |    +-- ReadOnlyRadioError              radio
- |    +-- WrongModeError                  radio
+ +-- RadioError                           radio.base
+ |    +-- InvalidRadioUrlError            radio.base
+ |    +-- NoResponseError                 radio.base
+ |    +-- PortBusyError                   radio.base
+ |    +-- PortLostError                   radio.base
+ |    +-- PortNotFoundError               radio.base
+ |    +-- PortPermissionError             radio.base
+ |    +-- ReadOnlyRadioError              radio.base
+ |    +-- WrongModeError                  radio.base
  |    +-- RadioSetupError                 provision.xbee_setup
  +-- BootError (RuntimeError)             sim.particles.emulated.boot
  |    +-- EmulatorMissingError            sim.particles.emulated.boot
  +-- HarnessError (RuntimeError)          sim.particles.emulated.harness
  +-- RunError (ValueError)                sim.runs.run
+ +-- SimFormatError (ValueError)          sim.runs.simcsv
  +-- VideoError (RuntimeError)            sim.runs.video
  +-- PlacementError (ValueError)          sim.scenarios.placement
  +-- ScenarioError (ValueError)           sim.scenarios.scenario
+ +-- WorldRecordError (ValueError)        sim.swarm.records
  +-- StudyOptionError (ValueError)        studies.definitions
  +-- ClusterError (RuntimeError)          studies.engine
  +-- MeasureError (ValueError)            studies.measures

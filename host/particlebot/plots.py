@@ -22,9 +22,9 @@ from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
 from particlebot.errors import ParticlebotError
-from particlebot.logs.world import WorldRecordError, WorldTrack, read_world
 from particlebot.protocol import Method, State
 from particlebot.resets import reset_cause, restarted
+from particlebot.sim.swarm.records import WorldRecordError, WorldTrack, read_world
 
 Record = dict[str, Any]
 

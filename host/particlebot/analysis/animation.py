@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from particlebot.errors import ParticlebotError
-from particlebot.logs.world import WorldRecordError, WorldTrack, read_world
 from particlebot.plots import PlotInputError, read_records
 from particlebot.sim.runs.pictures import Frame, View
 from particlebot.sim.runs.video import VideoError, encode, write_frame
+from particlebot.sim.swarm.records import WorldRecordError, WorldTrack, read_world
 from particlebot.sim.world.arena import Arena, Circle, Rect
 
 FRAME_EVERY_S = 2.0

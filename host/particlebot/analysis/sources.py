@@ -15,9 +15,11 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.analysis import simcsv, trackfile
+from particlebot.analysis import trackfile
 from particlebot.errors import ParticlebotError
-from particlebot.logs import jsonl, world
+from particlebot.logs import jsonl
+from particlebot.sim.runs import simcsv
+from particlebot.sim.swarm import records as world
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]

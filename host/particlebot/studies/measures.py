@@ -116,6 +116,3 @@ class RobotAdvance:
             "heading_error_deg": (heading + 180.0) % 360.0 - 180.0,
             "robot_size_ratio": float(robot.sum()) / setup.particles,
         }
-
-
-Measure = SpeedTowardLight | GapPassage | ObjectCarry | RobotAdvance

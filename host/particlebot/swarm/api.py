@@ -25,7 +25,7 @@ from particlebot.protocol import (
     Status,
 )
 from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio, parse_radio_url
-from particlebot.radio._simulated import SwarmRadio
+from particlebot.radio.simulated import SwarmRadio
 from particlebot.session import Listener, ReceivedFrame, Session
 from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery, Verdict, ids_text
 from particlebot.swarm.results import (

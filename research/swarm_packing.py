@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from particlebot.analysis.simcsv import read_published_csv
+from particlebot.sim.runs.simcsv import read_published_csv
 from particlebot.sim.scenarios.toml_file import read_scenario
 from particlebot.sim.world.world import Snapshot, World
 

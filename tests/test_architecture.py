@@ -7,17 +7,11 @@ import ast
 import re
 from pathlib import Path
 
-ROOT = next(
-    folder for folder in Path(__file__).resolve().parents if (folder / "mkdocs.yml").is_file()
-)
+from tests.support.repo import REPO_ROOT
+
+ROOT = REPO_ROOT
 PACKAGE = ROOT / "host" / "particlebot"
 PAGE = ROOT / "docs" / "architecture.md"
-
-# Imports the page forbids that the code still makes: issue 28 moves the published CSV format
-# into sim and the world's truth writer out of the way. Delete each pair once its import goes
-# (the last test fails while a listed pair no longer occurs, so the list cannot go stale).
-KNOWN_EXCEPTIONS = {("sim.runs", "analysis"), ("sim.swarm", "logs")}
-
 
 def rules() -> tuple[set[str], dict[str, set[str] | None]]:
     """The foundations and, per package, what it may import (None: everything), from the page."""
@@ -101,13 +95,8 @@ def test_every_package_has_a_row() -> None:
 
 
 def test_every_import_is_one_the_architecture_page_allows() -> None:
-    wrong = {pair: files for pair, files in violations().items() if pair not in KNOWN_EXCEPTIONS}
+    wrong = violations()
     assert not wrong, "imports docs/architecture.md does not allow:\n" + "\n".join(
         f"  {source} -> {target}: {', '.join(sorted(files))}"
         for (source, target), files in sorted(wrong.items())
     )
-
-
-def test_the_known_exceptions_still_occur() -> None:
-    gone = KNOWN_EXCEPTIONS - set(violations())
-    assert not gone, f"these imports are gone: delete them from KNOWN_EXCEPTIONS: {sorted(gone)}"

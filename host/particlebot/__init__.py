@@ -3,9 +3,11 @@
 Scripts drive a swarm through `particlebot.Swarm` (see README, "Experiments as code").
 """
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import Method, Param, State
 from particlebot.radio import RadioError
 from particlebot.swarm.api import Swarm
+from particlebot.swarm.campaigns import Verdict
 from particlebot.swarm.results import (
     IdInUse,
     NotConfirmed,
@@ -26,6 +28,7 @@ __all__ = [
     "Param",
     "ParamReport",
     "Particle",
+    "ParticlebotError",
     "ParticlesMissing",
     "RadioError",
     "Reply",
@@ -35,4 +38,5 @@ __all__ = [
     "Swarm",
     "SwarmError",
     "Unconfirmed",
+    "Verdict",
 ]

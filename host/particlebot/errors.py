@@ -1,6 +1,65 @@
 """The root of every error particlebot raises, so that a script can catch them all at once.
 
-    ParticlebotError
+Each error also keeps the built-in class callers caught before the root existed (ValueError for
+bad input, RuntimeError, OSError), shown in brackets; indentation shows subclasses.
+
+ParticlebotError
+ +-- AnimationError (RuntimeError)        analysis.animation
+ +-- GeometryError (ValueError)           analysis.geometry
+ +-- SourceError (ValueError)             analysis.sources
+ +-- TrackFormatError (ValueError)        analysis.trackfile
+ +-- VideoError (ValueError)              analysis.video
+ +-- CalibrationError (ValueError)        calibration.photocells
+ +-- NobodyAnswers                        calibration.prompts
+ +-- Quit                                 calibration.prompts
+ +-- ReadingsError (ValueError)           calibration.readings
+ +-- UsageError (ValueError)              commands.flash
+ +-- CommandError (ValueError)            console.commands
+ +-- ExperimentFileError                  experiments.plan
+ +-- ExperimentStopped                    experiments.runner
+ +-- NativeLibraryError (OSError)         firmware.native
+ +-- FleetError (ValueError)              fleet.model
+ +-- FleetFileError                       fleet.store
+ +-- LogError                             logs.jsonl
+ |    +-- LogFormatError (ValueError)     logs.jsonl
+ +-- OptionError (ValueError)             options
+ +-- PlotInputError (ValueError)          plots
+ +-- FrameError (ValueError)              protocol.frames
+ +-- PayloadError (ValueError)            protocol.generated
+ +-- AvrdudeError                         provision.avrdude
+ +-- BoardError                           provision.boards
+ +-- IdentityError (ValueError)           provision.identity
+ +-- ImageError (ValueError)              provision.image
+ +-- RadioError                           radio.base
+ |    +-- InvalidRadioUrlError            radio.base
+ |    +-- NoResponseError                 radio.base
+ |    +-- PortBusyError                   radio.base
+ |    +-- PortLostError                   radio.base
+ |    +-- PortNotFoundError               radio.base
+ |    +-- PortPermissionError             radio.base
+ |    +-- ReadOnlyRadioError              radio.base
+ |    +-- WrongModeError                  radio.base
+ |    +-- RadioSetupError                 provision.xbee_setup
+ +-- BootError (RuntimeError)             sim.particles.emulated.boot
+ |    +-- EmulatorMissingError            sim.particles.emulated.boot
+ +-- HarnessError (RuntimeError)          sim.particles.emulated.harness
+ +-- RunError (ValueError)                sim.runs.run
+ +-- SimFormatError (ValueError)          sim.runs.simcsv
+ +-- VideoError (RuntimeError)            sim.runs.video
+ +-- PlacementError (ValueError)          sim.scenarios.placement
+ +-- ScenarioError (ValueError)           sim.scenarios.scenario
+ +-- WorldRecordError (ValueError)        sim.swarm.records
+ +-- StudyOptionError (ValueError)        studies.definitions
+ +-- ClusterError (RuntimeError)          studies.engine
+ +-- MeasureError (ValueError)            studies.measures
+ +-- SetupError (ValueError)              studies.seam
+ +-- IdInUseError (ValueError)            swarm.model
+ +-- SwarmError                           swarm.results
+      +-- IdInUse                         swarm.results
+      +-- NotConfirmed                    swarm.results
+      +-- ParticlesMissing                swarm.results
+
+tests/test_architecture.py checks that every exception class the package defines is here.
 """
 
 

@@ -7,8 +7,10 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from particlebot.errors import ParticlebotError
 
-class OptionError(ValueError):
+
+class OptionError(ParticlebotError, ValueError):
     """A number that is not one, or out of its range; the message says what was expected."""
 
 

@@ -21,9 +21,10 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
-from particlebot.logs.world import WorldRecordError, WorldTrack, read_world
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import Method, State
 from particlebot.resets import reset_cause, restarted
+from particlebot.sim.swarm.records import WorldRecordError, WorldTrack, read_world
 
 Record = dict[str, Any]
 
@@ -55,7 +56,7 @@ STATE_COLOURS: dict[int, str] = {
 UNKNOWN_STATE_COLOUR = "#333333"
 
 
-class PlotInputError(ValueError):
+class PlotInputError(ParticlebotError, ValueError):
     """The log cannot be plotted (missing, empty, not a log, no STATUS frames)."""
 
 

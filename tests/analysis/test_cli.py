@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from particlebot.analysis.simcsv import write_published_csv
 from particlebot.analysis.synthetic import BlobSpec, breathing_blob
 from particlebot.analysis.trackfile import read_track
 from particlebot.cli import main
+from particlebot.sim.runs.simcsv import write_published_csv
 from tests.analysis.conftest import Clip
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

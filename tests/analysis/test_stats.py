@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
-from particlebot.analysis.simcsv import read_published_csv, write_published_csv
 from particlebot.analysis.sources import (
     PUBLISHED_CYCLE_S,
     CentroidSeries,
@@ -20,6 +19,7 @@ from particlebot.analysis.sources import (
 )
 from particlebot.analysis.stats import EXPERIMENT_CYCLE_S, StatsSettings, analyse
 from particlebot.analysis.trackfile import TrackRow, write_track
+from particlebot.sim.runs.simcsv import read_published_csv, write_published_csv
 from particlebot.swarm.api import Swarm
 
 

@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from particlebot.analysis.simcsv import read_published_csv, write_published_csv
 from particlebot.analysis.synthetic import (
     R_MAX_CM,
     R_MIN_CM,
@@ -19,6 +18,7 @@ from particlebot.analysis.synthetic import (
     breathing_blob,
     frames_from_run,
 )
+from particlebot.sim.runs.simcsv import read_published_csv, write_published_csv
 
 
 def test_the_region_of_discs_is_their_union_with_enclosed_gaps_filled() -> None:

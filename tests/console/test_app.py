@@ -459,6 +459,14 @@ def test_a_particle_that_reset_during_the_run_is_flagged_in_the_table() -> None:
 # ---- quitting and restarting while particles move ------------------------------------------------
 
 
+def known(ids: range) -> Fleet:
+    """A fleet file of these particles: the console knows whom a STOP must hear from."""
+    fleet = Fleet.new()
+    for particle in ids:
+        fleet.record(ParticleRecord(particle))
+    return fleet
+
+
 def test_quitting_while_particles_move_asks_and_can_stop_them_first() -> None:
     async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
         app = console(pilot)
@@ -482,8 +490,34 @@ def test_quitting_while_particles_move_asks_and_can_stop_them_first() -> None:
         await refreshed(pilot)
         assert not app.is_running
 
-    app = run_app(test)
+    app = run_app(test, fleet=known(range(1, 4)))
     assert app.return_value == 0
+
+
+def test_a_stop_nobody_confirms_does_not_quit_but_asks_again() -> None:
+    async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
+        app = console(pilot)
+        hear_particles(radio, app)
+        await pilot.press("q", "y")
+        stop = app.model.last("STOP")
+        assert stop is not None
+        # Nobody answers: at its deadline the STOP ends unconfirmed, and the console stays.
+        for _ in range(30):
+            radio.clock.advance(0.5)
+            await refreshed(pilot)
+        assert stop.done and not stop.success
+        assert app.is_running and isinstance(app.screen, ConfirmScreen)
+        assert stop.outcome in app.screen.question
+        assert "STOP was not confirmed: not quitting yet" in log_text(app)
+        sent = len(radio.sent)
+        await pilot.press("y")  # STOP again, and quit once it is confirmed
+        assert wait_until(lambda: len(radio.sent) > sent)
+        assert app.is_running
+        await pilot.press("q")  # q quits at once
+        await pilot.pause()
+        assert not app.is_running
+
+    run_app(test)
 
 
 def test_quitting_while_particles_move_can_leave_them_running_or_be_cancelled() -> None:

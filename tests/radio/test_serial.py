@@ -131,7 +131,7 @@ def test_a_console_on_a_silent_port_is_told_what_to_check(pty: VanishingPty) -> 
 def test_a_recording_on_a_silent_port_prints_the_hint(
     pty: VanishingPty, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr("particlebot.swarm.tracker.QUIET_HINT_S", 0.2)
+    monkeypatch.setattr("particlebot.swarm.model.QUIET_HINT_S", 0.2)
     log_dir = pty.path.parent / "logs"
     argv = ["log", "--radio", f"serial://{pty.path}", "--log-dir", str(log_dir), "--duration", "1"]
     assert main(argv) == 0

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from particlebot.analysis.sources import load_source
-from particlebot.logs.world import read_world
 from particlebot.plots import read_records
+from particlebot.sim.swarm.records import read_world
 from particlebot.swarm.api import Swarm
 
 pytestmark = [pytest.mark.usefixtures("built_images"), pytest.mark.e2e]

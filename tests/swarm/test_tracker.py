@@ -23,6 +23,7 @@ from particlebot.protocol import (
 )
 from particlebot.radio import Packet, PortLostError, ReadOnlyRadioError
 from particlebot.session import ReceivedFrame
+from particlebot.swarm.campaigns import Verdict
 from particlebot.swarm.tracker import Campaign, IdInUseError, Rename, SwarmTracker
 from tests.support.fakes import ManualClock, status_frame
 
@@ -267,13 +268,17 @@ def test_stop_names_the_particles_that_never_confirmed(
     assert repeats == [round(0.8 + 0.5 * k, 3) for k in range(19)]
 
 
-def test_stop_with_no_particles_known_ends_after_its_burst_and_says_so(
+def test_stop_with_no_particles_known_ends_after_its_burst_unconfirmed_never_a_success(
     model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:
     campaign = model.stop()
     run(model, clock, 0.4)
     assert sink.types() == ["Stop"] * 4
-    assert campaign.done and "no particles known" in campaign.outcome
+    # Silence is no answer: nothing says anyone stopped.
+    assert campaign.done and not campaign.success
+    assert campaign.verdict is Verdict.UNCONFIRMED
+    assert campaign.outcome == "STOP sent; nobody confirmed it"
+    assert model.notes[-1].level == "warning"
 
 
 def test_pings_go_to_four_particles_a_round_those_asked_least_first(

@@ -9,10 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from particlebot.logs.world import WorldRecordError, WorldTrack, read_world
+from particlebot.errors import ParticlebotError
 from particlebot.plots import PlotInputError, read_records
 from particlebot.sim.runs.pictures import Frame, View
 from particlebot.sim.runs.video import VideoError, encode, write_frame
+from particlebot.sim.swarm.records import WorldRecordError, WorldTrack, read_world
 from particlebot.sim.world.arena import Arena, Circle, Rect
 
 FRAME_EVERY_S = 2.0
@@ -22,7 +23,7 @@ CYCLING_M = 0.0005
 """A commanded radius this far above the contracted one is a cycle under way."""
 
 
-class AnimationError(RuntimeError):
+class AnimationError(ParticlebotError, RuntimeError):
     """The log holds no world to film, or ffmpeg failed; said in one line."""
 
 

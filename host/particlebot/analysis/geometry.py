@@ -15,6 +15,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.errors import ParticlebotError
+
 FloatArray = npt.NDArray[np.float64]
 Matrix = npt.NDArray[np.float64]
 
@@ -23,7 +25,7 @@ PAPER_FIELD_CM = (285.0, 160.0)
 PAPER_CAMERA_HEIGHT_CM = 225.0
 
 
-class GeometryError(ValueError):
+class GeometryError(ParticlebotError, ValueError):
     """The geometry cannot be built from what was given (degenerate points, no board found...)."""
 
 

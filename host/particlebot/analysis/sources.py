@@ -15,8 +15,11 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.analysis import simcsv, trackfile
-from particlebot.logs import jsonl, world
+from particlebot.analysis import trackfile
+from particlebot.errors import ParticlebotError
+from particlebot.logs import jsonl
+from particlebot.sim.runs import simcsv
+from particlebot.sim.swarm import records as world
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
@@ -29,7 +32,7 @@ PUBLISHED_CYCLE_S = 12.0
 _CONFIG_MAX_BYTES = 200_000
 
 
-class SourceError(ValueError):
+class SourceError(ParticlebotError, ValueError):
     """A source the statistics cannot use, said in one line."""
 
 

@@ -15,8 +15,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.analysis.simcsv import PublishedRun
 from particlebot.protocol import PARAM_SPECS, Param
+from particlebot.sim.runs.simcsv import PublishedRun
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.errors import ParticlebotError
+
 FloatArray = npt.NDArray[np.float64]
 
 COLUMNS = ("t_s", "x_cm", "y_cm", "area_cm2", "quality", "frame")
@@ -32,7 +34,7 @@ QUALITY_FLAGS = {
 }
 
 
-class TrackFormatError(ValueError):
+class TrackFormatError(ParticlebotError, ValueError):
     """Not a TRACK.csv, or a damaged one."""
 
 

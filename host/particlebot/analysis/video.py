@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.closing import ClosedOnExit
+from particlebot.errors import ParticlebotError
 
 Image = npt.NDArray[np.uint8]
 
@@ -23,7 +24,7 @@ def as_image(array: object) -> Image:
     return np.asarray(array, dtype=np.uint8)
 
 
-class VideoError(ValueError):
+class VideoError(ParticlebotError, ValueError):
     """A video that cannot be read or written, said in one line."""
 
 

@@ -7,5 +7,7 @@
 - `placements`, `prompts`: where particles go for each reading; who puts them there (a person
   asked, or the tool on a simulated swarm).
 - `bench`, `servo_bench`: both calibrations done with particles through the Swarm API.
+- `session`: the bench's swarm (opened on a radio), its particles, who places them, readings.
+- `reports`: what the calibrations say when done, as text (and the servo points as a CSV).
 - `figures`: what they look like.
 """

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from particlebot.calibration.readings import Reading, Readings
+from particlebot.errors import ParticlebotError
 from particlebot.fleet import PHOTOCELL_UNITS, PhotocellLaw
 from particlebot.protocol import PARAM_SPECS, Param
 from particlebot.sim.world.light import ADC_FULL_SCALE, SENSOR_COUNT
@@ -40,7 +41,7 @@ LUX_UNIT = "1/lux"
 assert {DISTANCE_UNIT, LUX_UNIT} == set(PHOTOCELL_UNITS)
 
 
-class CalibrationError(ValueError):
+class CalibrationError(ParticlebotError, ValueError):
     """Readings that cannot give a calibration; the message says which particle and why."""
 
 

@@ -6,15 +6,17 @@ import sys
 import threading
 from collections.abc import Callable
 
+from particlebot.errors import ParticlebotError
+
 KEEP_ALIVE_S = 0.2
 """How often the swarm is looked after while a person thinks about an answer."""
 
 
-class NobodyAnswers(Exception):  # noqa: N818 (reads as what happened)
+class NobodyAnswers(ParticlebotError):  # noqa: N818 (reads as what happened)
     """The prompt's input is closed (no terminal, or a file of answers that ran out)."""
 
 
-class Quit(Exception):  # noqa: N818 (reads as what happened)
+class Quit(ParticlebotError):  # noqa: N818 (reads as what happened)
     """The person asked to stop (q)."""
 
 

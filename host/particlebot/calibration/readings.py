@@ -18,6 +18,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from particlebot.errors import ParticlebotError
 from particlebot.fleet import FIRST_ID, LAST_ID
 from particlebot.protocol import Status
 from particlebot.sim.world.light import ADC_FULL_SCALE, SENSOR_COUNT
@@ -27,7 +28,7 @@ SENSOR_COLUMNS = tuple(f"A{k}" for k in range(SENSOR_COUNT))
 COLUMNS = ("step", "id", "distance_cm", "lux", "frames", *SENSOR_COLUMNS, "intensity", "faults")
 
 
-class ReadingsError(ValueError):
+class ReadingsError(ParticlebotError, ValueError):
     """A readings file that cannot be used; the message names the file, the line and why."""
 
 

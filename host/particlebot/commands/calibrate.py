@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import sys
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -26,8 +26,6 @@ from particlebot.protocol import PARAM_SPECS, Param
 
 if TYPE_CHECKING:
     from particlebot.calibration.bench import Bench, SensorOutcome
-    from particlebot.calibration.placements import Placer
-    from particlebot.calibration.prompts import Prompter
     from particlebot.calibration.readings import Readings
     from particlebot.swarm.api import Swarm
 
@@ -260,84 +258,15 @@ def run(args: argparse.Namespace) -> int:
 # ---- shared --------------------------------------------------------------------------------------
 
 
-def _fleet_path(args: argparse.Namespace) -> Path | None:
-    from particlebot.fleet import DEFAULT_FLEET_FILE
-
-    if args.fleet is not None:
-        return Path(args.fleet)
-    return DEFAULT_FLEET_FILE if DEFAULT_FLEET_FILE.exists() else None
-
-
-def _simulated(url: str) -> bool:
-    from particlebot.radio import parse_radio_url
-    from particlebot.swarm.api import SIMULATED_SCHEMES
-
-    return parse_radio_url(url).scheme in SIMULATED_SCHEMES
-
-
 def _stamp() -> str:
     return dt.datetime.now().strftime("%Y%m%d-%H%M%S")
 
 
-@contextmanager
-def _opened(args: argparse.Namespace) -> Iterator[Swarm]:
-    """The swarm on --radio: a simulation is stepped by this command (it moves the particles
-    between steps). The log's path is printed on the way out."""
-    from particlebot.swarm.api import Swarm
+def _opened(args: argparse.Namespace, out: TextIO) -> AbstractContextManager[Swarm]:
+    from particlebot.calibration import session
 
-    if not args.radio:
-        raise ValueError(
-            "say which radio: --radio serial:///dev/ttyUSB0, xbee:///dev/ttyUSB0 or virtual://9"
-        )
-    simulated = _simulated(args.radio)
-    swarm = Swarm.open(
-        args.radio,
-        log_dir=Path(args.log_dir),
-        fsync=args.fsync,
-        fleet=_fleet_path(args),
-        stepped=True if simulated else None,
-    )
-    try:
-        yield swarm
-    finally:
-        for note in swarm.notes():
-            if not note.startswith("info"):
-                print(f"  {note}")
-        swarm.close()
-        if swarm.log_path is not None:
-            print(f"Log: {swarm.log_path}")
-
-
-def _particle_ids(args: argparse.Namespace, swarm: Swarm) -> list[int]:
-    """--ids, else the first --count heard, else the fleet's, else a simulation's all."""
-    from particlebot.calibration.photocells import CalibrationError
-    from particlebot.radio import parse_radio_url
-    from particlebot.swarm.results import ParticlesMissing
-
-    try:
-        if args.ids:
-            swarm.wait_for(ids=args.ids)
-            return list(args.ids)
-        count = args.count
-        if count is None and swarm.fleet is None and _simulated(args.radio):
-            target = parse_radio_url(args.radio).target
-            count = int(target) if target.isdigit() else None
-        if count is not None:
-            heard = sorted(p.id for p in swarm.wait_for(count=count) if p.status is not None)
-            return heard[:count]
-        if swarm.fleet is not None:
-            return [p.id for p in swarm.wait_for()]
-    except ParticlesMissing as exc:
-        raise CalibrationError(str(exc)) from None
-    raise ValueError("say which particles: --ids 1-9, --count 9, or a fleet file (--fleet)")
-
-
-def _placer(args: argparse.Namespace, swarm: Swarm, prompter: Prompter, out: TextIO) -> Placer:
-    from particlebot.calibration.placements import PersonPlacer, SimulatedPlacer
-
-    if _simulated(args.radio):
-        return SimulatedPlacer(swarm.radio, out)
-    return PersonPlacer(prompter, out, keep_alive=lambda: swarm.sleep(0.2))
+    fleet = session.fleet_path(args.fleet)
+    return session.opened(args.radio, Path(args.log_dir), fsync=args.fsync, fleet=fleet, out=out)
 
 
 def _outputs(args: argparse.Namespace, name: str) -> tuple[Path, Path]:
@@ -349,13 +278,15 @@ def _outputs(args: argparse.Namespace, name: str) -> tuple[Path, Path]:
 
 
 def _sensors(args: argparse.Namespace, out: TextIO) -> int:
+    from particlebot.calibration import session
     from particlebot.calibration.bench import Bench, calibrate_sensors, readings_meta
     from particlebot.calibration.placements import line, lux_levels, ring
     from particlebot.calibration.prompts import Prompter
-    from particlebot.calibration.readings import Readings, ReadingsWriter, read_readings
+    from particlebot.calibration.readings import read_readings
+    from particlebot.calibration.reports import sensors_text
 
     lamp_height = args.lamp_height_cm or DEFAULT_LAMP_HEIGHT_CM
-    fleet_path = _fleet_path(args)
+    fleet_path = session.fleet_path(args.fleet)
     csv_path, png_path = _outputs(args, "sensors")
     if args.readings is not None:
         readings = read_readings(args.readings)
@@ -363,7 +294,7 @@ def _sensors(args: argparse.Namespace, out: TextIO) -> int:
         png_path = args.readings.with_suffix(".png") if args.output is None else png_path
     if args.readings is not None and (args.no_write or not args.radio):
         outcome = calibrate_sensors(readings, lamp_height, bench=None, fleet_path=fleet_path)
-        _report_sensors(outcome, out)
+        print(sensors_text(outcome), file=out)
         _plot_sensors(args, outcome, lamp_height, png_path, out)
         return 0
     levels = args.lux or args.distances or []
@@ -374,28 +305,21 @@ def _sensors(args: argparse.Namespace, out: TextIO) -> int:
             else ("--distances needs two or more different distances")
         )
         raise ValueError(f"{what}: a gamma is the slope between two light levels or more")
-    prompter = Prompter()
-    with _opened(args) as swarm:
-        placer = _placer(args, swarm, prompter, out)
+    with _opened(args, out) as swarm:
+        placer = session.placer(swarm, args.radio, Prompter(), out)
         bench = Bench(swarm, placer, out, args.frames, args.settle_s)
         if args.readings is None:
-            ids = _particle_ids(args, swarm)
+            ids = session.particle_ids(swarm, args.radio, args.ids, args.count)
             bench.check_at_rest(ids)
             if args.lux:
-                if _simulated(args.radio):
+                if session.simulated(args.radio):
                     raise ValueError("simulated particles are placed by distance: use --distances")
                 plan = lux_levels(ids, args.lux)
             else:
                 distances = args.distances or number_list(NON_NEGATIVE)(DEFAULT_DISTANCES)
                 plan = line(ids, distances, args.steps) if args.line else ring(ids, distances)
             meta = readings_meta("calibration", args.radio, lamp_height, args.frames)
-            writer = ReadingsWriter(csv_path, meta)
-            try:
-                rows = bench.measure_all(plan, writer)
-            finally:
-                writer.close()
-                print(f"Readings: {csv_path}", file=out)
-            readings = Readings(rows, meta, csv_path)
+            readings = session.measure(bench, plan, csv_path, meta)
         else:
             ids = readings.ids()
             swarm.wait_for(ids=ids)
@@ -408,7 +332,7 @@ def _sensors(args: argparse.Namespace, out: TextIO) -> int:
             new_law=args.new_law,
             reference_id=args.reference_id,
         )
-        _report_sensors(outcome, out)
+        print(sensors_text(outcome), file=out)
         if args.check:
             check_csv = csv_path.with_name(f"{csv_path.stem}-check.csv")
             checked = _measure_line(args, bench, ids, lamp_height, check_csv)
@@ -425,26 +349,6 @@ def _sensors(args: argparse.Namespace, out: TextIO) -> int:
             )
     _plot_sensors(args, outcome, lamp_height, png_path, out)
     return 0
-
-
-def _report_sensors(outcome: SensorOutcome, out: TextIO) -> None:
-    from particlebot.calibration.bench import calibration_table
-
-    calibration = outcome.calibration
-    law = calibration.law
-    gammas = [g / 1000 for c in calibration.corrections.values() for g in c.gamma_milli]
-    gains = [g / 1000 for c in calibration.corrections.values() for g in c.gain_milli]
-    levels = len({(r.distance_cm, r.lux) for r in outcome.readings.rows})
-    print(
-        f"Fitted {len(calibration.fits)} particle(s) on {levels} light levels: gamma "
-        f"{min(gammas):.3f}-{max(gammas):.3f}, gain {min(gains):.3f}-{max(gains):.3f}; law "
-        f"rho' = {law.scale:.5g} x ({law.unit}, "
-        f"{'the fleet file' + chr(39) + 's' if calibration.kept_law else 'new'})",
-        file=out,
-    )
-    print(calibration_table(calibration), file=out)
-    for note in outcome.notes:
-        print(f"  note: {note}", file=out)
 
 
 def _plot_sensors(
@@ -464,6 +368,7 @@ def _plot_sensors(
 
 
 def _check(args: argparse.Namespace, out: TextIO) -> int:
+    from particlebot.calibration import session
     from particlebot.calibration.bench import Bench
     from particlebot.calibration.prompts import Prompter
     from particlebot.calibration.readings import read_readings
@@ -476,10 +381,10 @@ def _check(args: argparse.Namespace, out: TextIO) -> int:
         if args.output is None:
             png_path = args.readings.with_suffix(".png")
     else:
-        with _opened(args) as swarm:
-            placer = _placer(args, swarm, Prompter(), out)
+        with _opened(args, out) as swarm:
+            placer = session.placer(swarm, args.radio, Prompter(), out)
             bench = Bench(swarm, placer, out, args.frames, args.settle_s)
-            ids = _particle_ids(args, swarm)
+            ids = session.particle_ids(swarm, args.radio, args.ids, args.count)
             bench.check_at_rest(ids)
             readings = _measure_line(args, bench, ids, lamp_height, csv_path)
     _report_check(readings, lamp_height, None if args.no_plot else png_path, out)
@@ -489,24 +394,16 @@ def _check(args: argparse.Namespace, out: TextIO) -> int:
 def _measure_line(
     args: argparse.Namespace, bench: Bench, ids: list[int], lamp_height: float, csv_path: Path
 ) -> Readings:
-    """Fig. S5's line, --trials times, each particle's readings averaged over --frames."""
-    from particlebot.calibration.bench import readings_meta
-    from particlebot.calibration.placements import trials
-    from particlebot.calibration.readings import Readings, ReadingsWriter
+    """Fig. S5's line from the options: --positions (or --spacing-cm apart), --trials times."""
+    from particlebot.calibration import session
 
     positions = getattr(args, "positions", None)
     if positions is None:
         spacing = getattr(args, "spacing_cm", None) or DEFAULT_SPACING_CM
         positions = [k * spacing for k in range(len(ids))]
-    plan = trials(ids, positions, args.trials)
-    meta = readings_meta("check", args.radio, lamp_height, args.frames)
-    writer = ReadingsWriter(csv_path, meta)
-    try:
-        rows = bench.measure_all(plan, writer)
-    finally:
-        writer.close()
-        bench.say(f"Readings: {csv_path}")
-    return Readings(rows, meta, csv_path)
+    return session.measure_line(
+        bench, ids, positions, args.trials, args.radio, lamp_height, csv_path
+    )
 
 
 def _report_check(
@@ -514,29 +411,10 @@ def _report_check(
 ) -> None:
     from particlebot.calibration.figures import plot_positions
     from particlebot.calibration.positions import check_positions
+    from particlebot.calibration.reports import check_text
 
     check = check_positions(readings, lamp_height)
-    print(
-        f"Fig. S5: {len(check.particles)} particles, {check.trials} trial(s); reference particle "
-        f"{check.reference_id}, lamp {lamp_height:g} cm above the photocells",
-        file=out,
-    )
-    after = check.has_after
-    print(
-        "    id  true cm   raw: estimate cm" + ("   calibrated: estimate cm" if after else ""),
-        file=out,
-    )
-    for p in check.particles:
-        line = f"  {p.id:>4}  {p.true_cm:>7.1f}   {p.before_mean:>7.1f} +- {p.before_sd:<5.1f}"
-        if after:
-            line += f"      {p.after_mean:>7.1f} +- {p.after_sd:<5.1f}"
-        print(line, file=out)
-    summary = f"RMS error: raw {check.rms_before():.1f} cm"
-    worst = f"worst particle's mean: raw {check.worst_before():.1f} cm"
-    if after:
-        summary += f", calibrated {check.rms_after():.1f} cm"
-        worst += f", calibrated {check.worst_after():.1f} cm"
-    print(f"{summary}; {worst}", file=out)
+    print(check_text(check, lamp_height), file=out)
     if png_path is not None:
         plot_positions(check, png_path)
         print(f"Plot: {png_path}", file=out)
@@ -546,8 +424,10 @@ def _report_check(
 
 
 def _servo(args: argparse.Namespace, out: TextIO) -> int:
+    from particlebot.calibration import session
     from particlebot.calibration.figures import plot_servo
     from particlebot.calibration.prompts import Prompter
+    from particlebot.calibration.reports import servo_text, write_servo_points
     from particlebot.calibration.servo import POINTS
     from particlebot.calibration.servo_bench import ServoBench, calibrate_servo
 
@@ -557,31 +437,11 @@ def _servo(args: argparse.Namespace, out: TextIO) -> int:
             raise ValueError(f"--pulses takes {POINTS} pulses, not {len(args.pulses)}")
         pulses = [int(p) for p in args.pulses]
     csv_path = args.output or OUTPUT_DIR / f"servo-{args.id}-{_stamp()}.csv"
-    with _opened(args) as swarm:
+    with _opened(args, out) as swarm:
         bench = ServoBench(swarm, args.id, Prompter(), out)
-        outcome = calibrate_servo(bench, pulses=pulses, fleet_path=_fleet_path(args))
-    print(
-        f"Wrote and read back particle {args.id}'s table: "
-        f"{', '.join(map(str, outcome.table.pulses))} us",
-        file=out,
-    )
-    for note in outcome.notes:
-        print(f"  note: {note}", file=out)
-    csv_path.parent.mkdir(parents=True, exist_ok=True)
-    lines = ["point,pulse_us,radius_mm,table_pulse_us,table_radius_mm"]
-    lines += [
-        f"{k},{p},{r:.2f},{t},{target:.2f}"
-        for k, (p, r, t, target) in enumerate(
-            zip(
-                outcome.pulses,
-                outcome.radii_mm,
-                outcome.table.pulses,
-                outcome.table.targets_mm,
-                strict=True,
-            )
-        )
-    ]
-    csv_path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        outcome = calibrate_servo(bench, pulses=pulses, fleet_path=session.fleet_path(args.fleet))
+    print(servo_text(outcome), file=out)
+    write_servo_points(outcome, csv_path)
     print(f"Points: {csv_path}", file=out)
     png = plot_servo(
         args.id,

@@ -21,7 +21,7 @@ from particlebot.console.worldmap import MapParticle, render_map
 from particlebot.logs.jsonl import LogError
 from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
 from particlebot.radio import RadioError
-from particlebot.radio._simulated import SwarmRadio
+from particlebot.radio.simulated import SwarmRadio
 from particlebot.radio.virtual import MAX_PARTICLES
 from particlebot.swarm.api import METHODS, Swarm, method_letter, method_of
 from particlebot.swarm.results import ParticlesMissing, StopReport, SwarmError

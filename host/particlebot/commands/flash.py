@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
+from particlebot.errors import ParticlebotError
 from particlebot.fleet import FleetError, FleetFileError, check_id, load_fleet
 from particlebot.options import NON_NEGATIVE, Bounds, float_arg, int_arg
 from particlebot.protocol import DEFINITION_HASH
@@ -20,7 +21,7 @@ if TYPE_CHECKING:
 DEFAULT_IMAGE = Path(__file__).resolve().parents[3] / "build" / "firmware" / "particle.hex"
 
 
-class UsageError(ValueError):
+class UsageError(ParticlebotError, ValueError):
     """Options that do not go together."""
 
 

@@ -56,8 +56,9 @@ def _frames(
     args: argparse.Namespace, lamp: tuple[float, float] | None
 ) -> tuple[list[SwarmFrame], float, tuple[float, float] | None]:
     """The frames, their rate and the lamp's place on the field."""
-    from particlebot.analysis import simcsv, sources, synthetic
+    from particlebot.analysis import sources, synthetic
     from particlebot.analysis.geometry import parse_pair
+    from particlebot.sim.runs import simcsv
 
     if args.source is None:
         fps = 5.0 if args.fps is None else args.fps
@@ -95,9 +96,9 @@ def run(args: argparse.Namespace) -> int:
     from particlebot.analysis.camera import Camera
     from particlebot.analysis.geometry import GeometryError, parse_pair
     from particlebot.analysis.render import Scene, render_video, write_truth
-    from particlebot.analysis.simcsv import SimFormatError
     from particlebot.analysis.sources import SourceError
     from particlebot.analysis.video import VideoError
+    from particlebot.sim.runs.simcsv import SimFormatError
 
     output = Path(args.output)
     try:

@@ -471,7 +471,7 @@ class ConsoleApp(App[int]):
         with contextlib.suppress(RadioError):  # the status bar shows a failed radio
             self.swarm.poll()
         if self._quit_after is not None and self._quit_after.done:
-            self.exit(0)
+            self._stop_before_quit_ended(self._quit_after)
         if self.on_tick is not None and not self._ending:
             code = self.on_tick()
             if code is not None:
@@ -628,18 +628,6 @@ class ConsoleApp(App[int]):
             self.exit(0)
             return
 
-        def answered(answer: str | None) -> None:
-            if answer == "stop":
-                self._run("stop")
-                self._quit_after = self.model.last("STOP")
-                self._write(
-                    "Quitting once every particle confirms STOP (at most "
-                    f"{self.model.stop_timeout:.0f} s); q quits at once",
-                    "yellow",
-                )
-            elif answer == "quit":
-                self.exit(0)
-
         self._ask_about_run(
             moving,
             "Send STOP before quitting?",
@@ -647,7 +635,39 @@ class ConsoleApp(App[int]):
                 ("y", "send STOP, then quit once they confirm it", "stop"),
                 ("n", "quit and leave them running", "quit"),
             ],
-            answered,
+            self._answered_quit,
+        )
+
+    def _answered_quit(self, answer: str | None) -> None:
+        if answer == "stop":
+            self._run("stop")
+            self._quit_after = self.model.last("STOP")
+            self._write(
+                "Quitting once every particle confirms STOP (at most "
+                f"{self.model.stop_timeout:.0f} s); q quits at once",
+                "yellow",
+            )
+        elif answer == "quit":
+            self.exit(0)
+
+    def _stop_before_quit_ended(self, stop: Campaign) -> None:
+        """The STOP that quitting waited for has ended: quits if it was confirmed; otherwise
+        says so (the outcome is in the messages) and asks again, for nothing says the
+        particles stopped."""
+        self._quit_after = None
+        if stop.success:
+            self.exit(0)
+            return
+        self._write("STOP was not confirmed: not quitting yet", "bold red")
+        self.push_screen(
+            ConfirmScreen(
+                f"{stop.outcome}. Quit all the same?",
+                [
+                    ("y", "send STOP again, then quit once they confirm it", "stop"),
+                    ("n", "quit, leaving them as they are", "quit"),
+                ],
+            ),
+            self._answered_quit,
         )
 
     async def on_input_submitted(self, event: Input.Submitted) -> None:

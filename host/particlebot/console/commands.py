@@ -6,6 +6,7 @@ import shlex
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import BROADCAST_ID, PARAM_SPECS, Method, Param
 from particlebot.swarm.api import METHODS, Swarm
 from particlebot.swarm.results import SwarmError
@@ -13,7 +14,7 @@ from particlebot.swarm.results import SwarmError
 METHOD_NAMES: dict[str, Method] = METHODS
 
 
-class CommandError(ValueError):
+class CommandError(ParticlebotError, ValueError):
     """The line could not be understood; the message says how to write it."""
 
 

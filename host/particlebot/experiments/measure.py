@@ -7,7 +7,7 @@ import math
 from collections.abc import Mapping
 
 from particlebot.radio import Radio
-from particlebot.radio._simulated import SwarmRadio
+from particlebot.radio.simulated import SwarmRadio
 
 
 def lamp_distance(radio: Radio) -> float | None:

@@ -16,7 +16,7 @@ import numpy as np
 from particlebot.analysis.sources import load_source
 from particlebot.analysis.stats import StatsResult, StatsSettings, analyse
 from particlebot.protocol import Param, State
-from particlebot.radio._simulated import SwarmRadio
+from particlebot.radio.simulated import SwarmRadio
 from particlebot.swarm.api import Swarm, method_letter, method_of
 
 PROGRESS_S = 60.0

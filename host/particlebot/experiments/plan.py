@@ -10,11 +10,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from particlebot.errors import ParticlebotError
 from particlebot.fleet import FleetFileError, load_fleet
 from particlebot.protocol import PARAM_SPECS, Method, Param
 from particlebot.radio import RadioError, parse_radio_url
 from particlebot.radio.faults import faults_from_url
 from particlebot.swarm.api import method_of
+from particlebot.toml_lines import key_lines, line_of
 
 BETWEEN = ("pause", "prompt", "none")
 """What happens between two trials: a pause of pause_s seconds, a question to the person (to
@@ -54,7 +56,7 @@ _TRIAL_KEYS = {
 }
 
 
-class ExperimentFileError(Exception):
+class ExperimentFileError(ParticlebotError):
     """What is wrong with an experiment file, in one line: `FILE:LINE: key: what to write`."""
 
 
@@ -94,55 +96,18 @@ class Experiment:
         return sum(trial.repetitions for trial in self.trials)
 
 
-class _Lines:
-    """Where each key of the file is written: TOML parsers keep no positions, so the file is
-    read line by line for the table headers and the `key =` lines under each."""
-
-    _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-\" ]+?)\s*\]\]?\s*(#.*)?$")
-    _KEY = re.compile(r"^\s*(\"[^\"]*\"|'[^']*'|[A-Za-z0-9_\-]+)(\s*\.\s*[A-Za-z0-9_\-]+)*\s*=")
-
-    def __init__(self, text: str) -> None:
-        self.keys: dict[tuple[str, ...], int] = {}
-        self.tables: dict[tuple[str, ...], int] = {}
-        where: tuple[str, ...] = ()
-        trials = 0
-        for number, line in enumerate(text.splitlines(), start=1):
-            header = self._HEADER.match(line)
-            if header:
-                names = tuple(part.strip().strip('"') for part in header.group(2).split("."))
-                if header.group(1) == "[[" and names == ("trial",):
-                    trials += 1
-                    where = ("trial", str(trials))
-                elif names[:1] == ("trial",) and trials:
-                    where = ("trial", str(trials), *names[1:])
-                else:
-                    where = names
-                self.tables.setdefault(where, number)
-                continue
-            key = self._KEY.match(line)
-            if key:
-                self.keys.setdefault((*where, key.group(1).strip("\"'")), number)
-
-    def line(self, *path: str) -> int:
-        """The line of the key at path (a table's key, or the table itself), best effort."""
-        for end in range(len(path), 0, -1):
-            found = self.keys.get(path[:end]) or self.tables.get(path[:end])
-            if found:
-                return found
-        return 1
-
-
 class _Reader:
     """Typed access to one table of the file; every mistake names file, line and key."""
 
-    def __init__(self, path: Path, lines: _Lines, where: tuple[str, ...], label: str) -> None:
+    def __init__(self, path: Path, lines: dict[str, int], where: str, label: str) -> None:
+        """lines: key_lines of the file; where: the table's dotted path ("" at the top)."""
         self.path = path
         self.lines = lines
         self.where = where
         self.label = label
 
     def error(self, key: str, text: str) -> ExperimentFileError:
-        line = self.lines.line(*self.where, key)
+        line = line_of(self.lines, f"{self.where}.{key}" if self.where else key)
         name = f"{self.label}{key}" if key else self.label.rstrip(": ")
         return ExperimentFileError(f"{self.path}:{line}: {name}: {text}")
 
@@ -222,11 +187,11 @@ def load_experiment(path: Path) -> Experiment:
         if at:
             what += f" (column {at.group(2)})"
         raise ExperimentFileError(f"{path}:{line}: not valid TOML: {what}") from None
-    return _experiment(path, document, _Lines(text))
+    return _experiment(path, document, key_lines(text))
 
 
-def _experiment(path: Path, document: dict[str, Any], lines: _Lines) -> Experiment:
-    top = _Reader(path, lines, (), "")
+def _experiment(path: Path, document: dict[str, Any], lines: dict[str, int]) -> Experiment:
+    top = _Reader(path, lines, "", "")
     top.only(document, _TOP_KEYS)
     radio = document.get("radio")
     if radio is not None:
@@ -272,13 +237,13 @@ def _experiment(path: Path, document: dict[str, Any], lines: _Lines) -> Experime
 
 def _trial(
     path: Path,
-    lines: _Lines,
+    lines: dict[str, int],
     number: int,
     table: dict[str, Any],
     between: str,
     pause_s: float,
 ) -> Trial:
-    read = _Reader(path, lines, ("trial", str(number)), f"trial {number}: ")
+    read = _Reader(path, lines, f"trial[{number}]", f"trial {number}: ")
     read.only(table, _TRIAL_KEYS)
     if "method" not in table:
         raise read.error("", 'no method: write method = "D" (or A, B, C)')
@@ -318,8 +283,8 @@ def _trial(
     )
 
 
-def _settings(path: Path, lines: _Lines, number: int, table: object) -> dict[Param, int]:
-    read = _Reader(path, lines, ("trial", str(number), "set"), f"trial {number}: set.")
+def _settings(path: Path, lines: dict[str, int], number: int, table: object) -> dict[Param, int]:
+    read = _Reader(path, lines, f"trial[{number}].set", f"trial {number}: set.")
     if not isinstance(table, dict):
         raise read.error("", "write the parameters as a [trial.set] table under the trial")
     settings: dict[Param, int] = {}

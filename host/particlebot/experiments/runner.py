@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TextIO
 from urllib.parse import urlencode
 
+from particlebot.errors import ParticlebotError
 from particlebot.experiments.measure import lamp_distance
 from particlebot.experiments.plan import Experiment, Trial, is_simulated
 from particlebot.fleet import FleetFileError
@@ -25,7 +26,7 @@ PROGRESS_S = 30.0
 """A running trial says how far it got this often (the radio's time)."""
 
 
-class ExperimentStopped(Exception):  # noqa: N818 (reads as what happened)
+class ExperimentStopped(ParticlebotError):  # noqa: N818 (reads as what happened)
     """A trial could not start and the file says on_failure = "stop"."""
 
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from particlebot.closing import ClosedOnExit
+from particlebot.errors import ParticlebotError
 from particlebot.protocol.generated import (
     FRAME_OVERHEAD,
     MAX_PAYLOAD,
@@ -40,7 +41,7 @@ _REPO_ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_LIBRARY = _REPO_ROOT / "build" / "native" / "libparticle.so"
 
 
-class NativeLibraryError(OSError):
+class NativeLibraryError(ParticlebotError, OSError):
     """The native firmware library is missing or cannot be loaded."""
 
 

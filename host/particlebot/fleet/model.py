@@ -9,6 +9,7 @@ import re
 import secrets
 from dataclasses import dataclass, field
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import BASE_STATION_ID, BROADCAST_ID, UNASSIGNED_ID
 
 # Ids the protocol leaves to particles: everything but the base station's, the unassigned one
@@ -29,7 +30,7 @@ FACTORY_PAN_ID = 0x3332
 """Every XBee leaves the factory on this PAN; a fleet avoids it, so as not to hear strangers."""
 
 
-class FleetError(ValueError):
+class FleetError(ParticlebotError, ValueError):
     """A value that cannot be in a fleet; the message says which and why."""
 
 

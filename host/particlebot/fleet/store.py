@@ -19,6 +19,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from particlebot.errors import ParticlebotError
 from particlebot.fleet.model import (
     BaseStationRecord,
     Fleet,
@@ -57,7 +58,7 @@ _PARTICLE_KEYS = (
 )
 
 
-class FleetFileError(Exception):
+class FleetFileError(ParticlebotError):
     """The fleet file is missing, unreadable, malformed or too open; the message says what to do."""
 
 

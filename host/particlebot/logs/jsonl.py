@@ -13,6 +13,7 @@ from collections.abc import Callable, Hashable, Iterator
 from pathlib import Path
 from typing import Any, cast
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import DEFINITION_HASH, Frame, Message
 from particlebot.radio import LinkEvent, Packet
 from particlebot.session import Dropped, Listener, Note, ReceivedFrame, SentFrame
@@ -173,7 +174,7 @@ def _file_in_the_way(folder: Path) -> Path | None:
     return None
 
 
-class LogError(Exception):
+class LogError(ParticlebotError):
     """A log that cannot be written or read; the message names the file and says why."""
 
 

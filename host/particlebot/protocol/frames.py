@@ -15,6 +15,7 @@ from collections.abc import Callable, Hashable
 from dataclasses import dataclass, fields
 from functools import cached_property
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol.generated import (
     FRAME_OVERHEAD,
     MAX_PAYLOAD,
@@ -55,7 +56,7 @@ class DropReason(enum.Enum):
     """A valid frame whose payload size does not fit its type (still returned, message None)."""
 
 
-class FrameError(ValueError):
+class FrameError(ParticlebotError, ValueError):
     """A byte string is not exactly one valid frame, or a frame cannot be built."""
 
     def __init__(self, reason: DropReason, detail: str) -> None:

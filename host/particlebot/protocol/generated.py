@@ -8,6 +8,8 @@ import struct
 from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple, Self, TypeAlias
 
+from particlebot.errors import ParticlebotError
+
 GENERATOR_VERSION = 2
 DEFINITION_HASH = 0xF1AAC96B
 """CRC-32 of the definition's layout; every STATUS frame carries the firmware's."""
@@ -21,7 +23,7 @@ UNASSIGNED_ID = 254
 """Reported by a particle whose EEPROM holds no id yet."""
 
 
-class PayloadError(ValueError):
+class PayloadError(ParticlebotError, ValueError):
     """A payload has the wrong size for its message, or a field value does not fit."""
 
 

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
+from particlebot.errors import ParticlebotError
+
 EEPROM_SIZE = 1024
 """The ATmega32U4's EEPROM (datasheet), which avrdude reads whole."""
 PART = "atmega32u4"
@@ -34,7 +36,7 @@ _WRITE_CHUNK = 32
 _FAILURE_WORDS = ("error", "mismatch", "not respond", "can't", "cannot", "failed", "timeout")
 
 
-class AvrdudeError(Exception):
+class AvrdudeError(ParticlebotError):
     """avrdude is missing, or the session failed; the message is one line saying why."""
 
 

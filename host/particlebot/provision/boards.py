@@ -19,6 +19,8 @@ from typing import Protocol
 import serial
 from serial.tools import list_ports
 
+from particlebot.errors import ParticlebotError
+
 FIO_VID = 0x1B4F
 FIO_RUNNING_PID = 0xF101
 FIO_BOOTLOADER_PID = 0xF100
@@ -48,7 +50,7 @@ class BoardPort:
         return self.location or self.device
 
 
-class BoardError(Exception):
+class BoardError(ParticlebotError):
     """A board could not be reached; the message says why and what to do."""
 
 

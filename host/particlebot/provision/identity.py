@@ -13,6 +13,7 @@ one (with cause 0, which is also what a particle reads after Caterina starts it)
 
 from __future__ import annotations
 
+from particlebot.errors import ParticlebotError
 from particlebot.firmware import NativeParticle
 from particlebot.protocol import (
     BASE_STATION_ID,
@@ -34,7 +35,7 @@ _RESET_CAUSE = 0
 _REPLY_WAIT_MS = 50
 
 
-class IdentityError(ValueError):
+class IdentityError(ParticlebotError, ValueError):
     """The firmware logic refused the change (an id outside 1..253)."""
 
 

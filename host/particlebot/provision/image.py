@@ -6,11 +6,13 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
+from particlebot.errors import ParticlebotError
+
 APPLICATION_FLASH = 28_672
 """Flash the Fio v3's Caterina bootloader leaves to the firmware (32 KB less its 4 KB)."""
 
 
-class ImageError(ValueError):
+class ImageError(ParticlebotError, ValueError):
     """The file is missing, unreadable or not an Intel HEX image that fits; one line says which."""
 
 

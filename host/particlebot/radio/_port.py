@@ -7,7 +7,7 @@ import os
 
 import serial
 
-from particlebot.radio import PortBusyError, PortNotFoundError, PortPermissionError, RadioError
+from particlebot.radio.base import PortBusyError, PortNotFoundError, PortPermissionError, RadioError
 
 LIST_PORTS_HINT = "list ports with: python -m serial.tools.list_ports -v"
 

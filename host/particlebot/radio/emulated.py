@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import Self
 
 from particlebot.options import POSITIVE, Bounds
-from particlebot.radio import RadioUrl
-from particlebot.radio._simulated import SwarmRadio, swarm_config_from_url
+from particlebot.radio.base import RadioUrl
+from particlebot.radio.simulated import SwarmRadio, swarm_config_from_url
 from particlebot.sim.swarm.config import Level, SwarmConfig
 
 OPTIONS = frozenset({"elf", "base_baud", "buffer"})

@@ -9,7 +9,7 @@ mean the same on every radio, as near as each can honour them:
   host and its radio, to see how a trial copes with a worse link.
 - seed makes a simulated radio's losses (and its particles, and a line's or blob's placement) the
   same each time. scenario says where the simulated particles, the lamp and the obstacles are:
-  line, blob, or a scenario file (particlebot.radio._simulated.parse_scenario).
+  line, blob, or a scenario file (particlebot.radio.simulated.parse_scenario).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Self
 
 from particlebot.options import NON_NEGATIVE, Bounds
-from particlebot.radio import LinkEvent, Packet, Radio, RadioUrl
+from particlebot.radio.base import LinkEvent, Packet, Radio, RadioUrl
 
 FAULT_OPTIONS = frozenset({"loss", "delay_ms"})
 """What every radio that sends takes."""

@@ -10,7 +10,8 @@ from typing import Self
 import serial
 
 from particlebot.options import POSITIVE
-from particlebot.radio import (
+from particlebot.radio._port import open_serial, port_present, quiet_hint
+from particlebot.radio.base import (
     InvalidRadioUrlError,
     LinkState,
     Packet,
@@ -18,7 +19,6 @@ from particlebot.radio import (
     Radio,
     RadioUrl,
 )
-from particlebot.radio._port import open_serial, port_present, quiet_hint
 from particlebot.radio.faults import FAULT_OPTIONS
 
 # API frame types an XBee 802.15.4 radio emits towards its host; used only to warn that a radio

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Self
 
-from particlebot.radio import RadioUrl
-from particlebot.radio._simulated import SwarmRadio, swarm_config_from_url
+from particlebot.radio.base import RadioUrl
+from particlebot.radio.simulated import SwarmRadio, swarm_config_from_url
 from particlebot.sim.swarm.config import Level, SwarmConfig
 
 MAX_PARTICLES = 200

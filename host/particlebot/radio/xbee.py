@@ -18,7 +18,8 @@ from digi.xbee.packets.raw import RX16Packet, RX64Packet
 from digi.xbee.serial import XBeeSerialPort
 
 from particlebot.options import NON_NEGATIVE, POSITIVE
-from particlebot.radio import (
+from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present, quiet_hint
+from particlebot.radio.base import (
     InvalidRadioUrlError,
     LinkState,
     NoResponseError,
@@ -29,7 +30,6 @@ from particlebot.radio import (
     RadioUrl,
     WrongModeError,
 )
-from particlebot.radio._port import LIST_PORTS_HINT, open_serial, port_present, quiet_hint
 from particlebot.radio.faults import FAULT_OPTIONS
 
 _log = logging.getLogger(__name__)

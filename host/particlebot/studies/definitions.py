@@ -7,17 +7,12 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 
+from particlebot.errors import ParticlebotError
 from particlebot.studies import published as paper
-from particlebot.studies.measures import (
-    GapPassage,
-    Measure,
-    ObjectCarry,
-    RobotAdvance,
-    SpeedTowardLight,
-)
+from particlebot.studies.measures import GapPassage, ObjectCarry, RobotAdvance, SpeedTowardLight
 from particlebot.studies.packing import densest_packing_diameter_m
 from particlebot.studies.published import CYCLE_S, D_MIN_M, R_MIN_M, Published
-from particlebot.studies.spec import CellValue, PassiveObject, Rect, RunSpec, WorldSetup
+from particlebot.studies.spec import CellValue, Measure, PassiveObject, Rect, RunSpec, WorldSetup
 
 PLACEMENTS = ("blob", "published-blob", "hex", "line")
 FAR_LAMP_M = 20.0
@@ -33,7 +28,7 @@ GAP_SHADOW = "last"
 defining the lowest end of the signal gradient": the simulator's shadow mode LAST."""
 
 
-class StudyOptionError(ValueError):
+class StudyOptionError(ParticlebotError, ValueError):
     """A study option the user gave is wrong; the message is one line, naming the option."""
 
 

@@ -18,6 +18,7 @@ from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
+from particlebot.errors import ParticlebotError
 from particlebot.studies.progress import Progress
 from particlebot.studies.runners import Runner, execute
 from particlebot.studies.spec import RunRecord, RunSpec
@@ -38,7 +39,7 @@ cluster of hundreds of workers should not flood the scheduler."""
 LOG = logging.getLogger(__name__)
 
 
-class ClusterError(RuntimeError):
+class ClusterError(ParticlebotError, RuntimeError):
     """The Dask cluster cannot be reached or lost; the message is one line."""
 
 

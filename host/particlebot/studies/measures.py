@@ -10,6 +10,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from particlebot.errors import ParticlebotError
 from particlebot.studies.published import R_MAX_M, R_MIN_M
 from particlebot.studies.spec import SimOutcome, WorldSetup
 
@@ -18,7 +19,7 @@ CONTACT_M = 2 * R_MAX_M + 0.005
 within the magnets' 5 mm reach (the published attraction is negligible beyond a few mm)."""
 
 
-class MeasureError(ValueError):
+class MeasureError(ParticlebotError, ValueError):
     """The outcome does not hold what the measure needs (a track too short, no object)."""
 
 
@@ -115,6 +116,3 @@ class RobotAdvance:
             "heading_error_deg": (heading + 180.0) % 360.0 - 180.0,
             "robot_size_ratio": float(robot.sum()) / setup.particles,
         }
-
-
-Measure = SpeedTowardLight | GapPassage | ObjectCarry | RobotAdvance

@@ -20,9 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from particlebot.analysis.simcsv import read_published_csv
+from particlebot.errors import ParticlebotError
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.runs.run import SCENARIO_FILE, Run, latest_snapshot
+from particlebot.sim.runs.simcsv import read_published_csv
 from particlebot.sim.scenarios.build import build_world, place_swarm
 from particlebot.sim.scenarios.scenario import (
     ControllerKind,
@@ -60,7 +61,7 @@ the gap study's wall and the carry study's object at 0.75 DPD)."""
 POSITIONS_FILE = "turned-placement.csv"
 
 
-class SetupError(ValueError):
+class SetupError(ParticlebotError, ValueError):
     """A setup the simulator cannot put down (one line: what is in the way)."""
 
 

@@ -6,15 +6,12 @@ import hashlib
 import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from particlebot.studies.published import DT_S
-
-if TYPE_CHECKING:
-    from particlebot.studies.measures import Measure
 
 FloatArray = npt.NDArray[np.float64]
 CellValue = int | float | str
@@ -138,6 +135,18 @@ class SimOutcome:
     object_start: tuple[float, float] | None = None
     object_end: tuple[float, float] | None = None
     summary: dict[str, float] = field(default_factory=dict)
+
+
+class Measure(Protocol):
+    """How a run's outcome becomes a study's numbers (studies.measures holds the studies'
+    measures): a frozen dataclass, whose fields are its parameters (they enter the run's
+    fingerprint), with evaluate. Specs depend on this, not on the measures themselves."""
+
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+
+    def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
+        """The numbers, by name; MeasureError when the outcome lacks what they need."""
+        ...
 
 
 @dataclass(frozen=True)

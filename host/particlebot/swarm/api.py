@@ -25,9 +25,9 @@ from particlebot.protocol import (
     Status,
 )
 from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio, parse_radio_url
-from particlebot.radio._simulated import SwarmRadio
+from particlebot.radio.simulated import SwarmRadio
 from particlebot.session import Listener, ReceivedFrame, Session
-from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery, ids_text
+from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery, Verdict, ids_text
 from particlebot.swarm.results import (
     IdInUse,
     NotConfirmed,
@@ -154,6 +154,9 @@ class Swarm:
                 roster=None if fleet is None else fleet.roster_ids(),
                 quiet_hint=radio.quiet_hint,
                 stop_grace=stop_grace,
+                # Without a fleet file, a STOP is called confirmed only once the base station
+                # has listened for the grace period's length, with or without the grace period.
+                listen_s=STOP_GRACE_S,
             )
             self.session.add_listener(self.tracker)
         except BaseException:
@@ -187,7 +190,8 @@ class Swarm:
         whether calls on this object step a simulated radio (default: at speed=max; a UI that
         polls on a timer wants a paced thread instead, False). stop_grace: seconds after
         opening during which STOP keeps going out whatever has been heard (particles this
-        session has not heard of may be moving).
+        session has not heard of may be moving). Without a fleet, a STOP given within
+        STOP_GRACE_S of opening with a shorter grace ends unconfirmed at best (StopReport.verdict).
 
         Raises RadioError, particlebot.logs.jsonl.LogError or FleetFileError with one line
         saying what to change.
@@ -402,6 +406,7 @@ class Swarm:
         never_heard = max(0, campaign.required() - len(campaign.confirmed) - len(unconfirmed))
         return StopReport(
             confirmed=campaign.success and bool(campaign.confirmed),
+            verdict=campaign.verdict or Verdict.FAILED,
             stopped=tuple(sorted(self._ids(campaign.confirmed))),
             unconfirmed=unconfirmed,
             never_heard=never_heard,

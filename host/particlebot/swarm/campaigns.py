@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import Enum
 
 from particlebot.protocol import BROADCAST_ID, Message, Param, ParamResult, State
 
@@ -69,6 +70,20 @@ def ids_text(ids: list[int] | set[int] | tuple[int, ...]) -> str:
     return ", ".join(parts)
 
 
+class Verdict(Enum):
+    """How a campaign ended."""
+
+    CONFIRMED = "confirmed"
+    """Every particle expected answered that it obeyed, and the base station knew the swarm."""
+    UNCONFIRMED = "unconfirmed"
+    """Sent, but nobody can vouch for every particle: no particle confirmed, or the base station
+    had not listened long enough to know who is out there (a STOP just after it started)."""
+    FAILED = "failed"
+    """Some particle expected did not confirm in time, or the command could not be sent."""
+    SUPERSEDED = "superseded"
+    """A newer command of the same kind replaced it."""
+
+
 @dataclass
 class Campaign:
     """A command broadcast until every targeted particle confirms it, or time runs out.
@@ -85,7 +100,8 @@ class Campaign:
     `pending` and `confirmed` hold row keys (see particlebot.swarm.roster). Particles heard for
     the first time while the campaign runs join it (`join_new`). It succeeds only once nothing is
     pending, the burst is out, `hold_until` has passed and at least `required()` particles
-    confirmed.
+    confirmed; with `known` False (a base station that cannot vouch for every particle), such an
+    ending is UNCONFIRMED, never CONFIRMED.
     """
 
     name: str
@@ -102,6 +118,8 @@ class Campaign:
     required: Callable[[], int] = lambda: 0
     """How many particles must confirm at least (the largest group seen, for STOP)."""
     hold_until: float = 0.0
+    known: Callable[[], bool] = lambda: True
+    """Whether the base station knows every particle that may have to obey (see Verdict)."""
     join_new: bool = True
     confirmed: set[str] = field(default_factory=set)
     rounds: int = 0
@@ -111,9 +129,15 @@ class Campaign:
     last_broadcast_ping: float = -1e18
     send_failures: int = 0
     done: bool = False
-    success: bool = False
+    verdict: Verdict | None = None
+    """How it ended (None while it runs)."""
     outcome: str = ""
     finished_at: float | None = None
+
+    @property
+    def success(self) -> bool:
+        """Whether it ended confirmed."""
+        return self.verdict is Verdict.CONFIRMED
 
     @property
     def burst_sent(self) -> bool:

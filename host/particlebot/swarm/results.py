@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import Method, Param, ParamResult, State, Status
-from particlebot.swarm.campaigns import ids_text
+from particlebot.swarm.campaigns import Verdict, ids_text
 
 
 @dataclass(frozen=True)
@@ -123,12 +124,15 @@ class StopReport:
     """From the first STOP to the outcome."""
     text: str
     """The one-line outcome the console shows."""
+    verdict: Verdict = Verdict.FAILED
+    """CONFIRMED (then `confirmed`), UNCONFIRMED (sent, but nobody can vouch for every
+    particle: nobody confirmed, or the base station had not listened long enough), or FAILED."""
 
     def __str__(self) -> str:
         return self.text
 
 
-class SwarmError(Exception):
+class SwarmError(ParticlebotError):
     """Something the swarm could not do; the message says what, and what to try."""
 
 

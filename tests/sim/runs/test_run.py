@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from particlebot.analysis import simcsv, sources
+from particlebot.analysis import sources
+from particlebot.sim.runs import simcsv
 from particlebot.sim.runs.csvlog import keep_rows_through
 from particlebot.sim.runs.run import Run, RunError, latest_snapshot
 from particlebot.sim.runs.video import encode

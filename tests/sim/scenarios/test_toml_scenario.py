@@ -16,9 +16,10 @@ from particlebot.sim.scenarios.scenario import (
     Scenario,
     ScenarioError,
 )
-from particlebot.sim.scenarios.toml_file import key_lines, parse_scenario, read_scenario
+from particlebot.sim.scenarios.toml_file import parse_scenario, read_scenario
 from particlebot.sim.scenarios.write import to_toml
 from particlebot.sim.world.light import ShadowMode
+from particlebot.toml_lines import key_lines
 from tests.support.repo import REPO_ROOT
 
 REPO = REPO_ROOT

@@ -10,6 +10,7 @@ from particlebot.sim.particles.model.published import PublishedController
 from particlebot.sim.world import Lamp, PhysicsParams, World
 from particlebot.sim.world import kernels as k
 from particlebot.sim.world import world as world_module
+from particlebot.sim.world.kernels import binning, lists, step
 from tests.sim.world.conftest import R_MIN, cluster
 from tests.sim.world.reference import lockstep
 
@@ -27,7 +28,7 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
     assert world._bounds.shape[0] > 2  # parallel chunks
     world.step(20)
     w = world
-    ncx, ncy, _, start, members = k._prepare(
+    ncx, ncy, _, start, members = lists._prepare(
         w._pos, w._ref, w._vel, w._body, w._flags, w._ext, w._bounds, w._prm, True, w.threads,
         w._prm[k.P_LIST_RADIUS],
     )  # fmt: skip
@@ -38,13 +39,13 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
         values = np.zeros((w._pair_values.shape[0], k.PAIR_VALUE_ROWS, block))
         body, flags = w._body.copy(), w._flags.copy()
         for parity in (0, 1):
-            k._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel, body, flags, members,
+            step._pairs_cells_chunks(w._bounds, parity, w._pos, w._vel, body, flags, members,
                                   start, ncx, ncy, index, values, w._prm)  # fmt: skip
         sums[f"grid {block}"] = (body, flags)
-        nbr = k._lists_from_ref(w._ref, w._nbr, w._ncount, w._bounds, w._prm)
+        nbr = lists._lists_from_ref(w._ref, w._nbr, w._ncount, w._bounds, w._prm)
         body, flags = w._body.copy(), w._flags.copy()
         for parity in (0, 1):
-            k._pairs_chunks(w._bounds, parity, w._pos, w._vel, body, flags, nbr, w._ncount,
+            step._pairs_chunks(w._bounds, parity, w._pos, w._vel, body, flags, nbr, w._ncount,
                             index, values, w._prm)  # fmt: skip
         sums[f"lists {block}"] = (body, flags)
     for block in (k.PAIR_BLOCK, 37):
@@ -74,14 +75,14 @@ def test_pairs_reached_through_the_grids_order_equal_pairs_after_re_ordering() -
         pos, ref, vel = w._pos[:, shuffle], w._ref[:, shuffle], w._vel[:, shuffle]
         body, flags, ext = w._body[:, shuffle], w._flags[:, shuffle], w._ext[shuffle]
         bounds = w._bounds.copy()
-        ncx, ncy, _, start, members = k._prepare(
+        ncx, ncy, _, start, members = lists._prepare(
             pos, ref, vel, body, flags, ext, bounds, w._prm, sort, w.threads,
             w._prm[k.P_LIST_RADIUS] - w._prm[k.P_SKIN],
         )  # fmt: skip
         assert np.array_equal(members, np.arange(x.size)) == sort
         body[[k.B_FR, k.B_FA, k.B_FX, k.B_FY]] = 0.0  # (the same)
         for parity in (0, 1):
-            k._pairs_cells_chunks(bounds, parity, pos, vel, body, flags, members, start,
+            step._pairs_cells_chunks(bounds, parity, pos, vel, body, flags, members, start,
                                   ncx, ncy, w._pair_index, w._pair_values, w._prm)  # fmt: skip
         by_particle = np.empty_like(body)
         by_particle[:, ext] = body  # row e: particle e's, wherever it was stored
@@ -124,8 +125,8 @@ def test_binning_and_reordering_in_parts_equal_the_serial_passes(splits: int) ->
     pos = np.stack([rng.uniform(-3.0, 5.0, n), rng.uniform(-2.0, 1.0, n)])
     pos[:, 100:140] = pos[:, 7:8]  # 41 particles in one place
     radius = 0.265
-    serial = k._grid(pos, radius)
-    parts = k._grid_split(pos, radius, splits)
+    serial = binning._grid(pos, radius)
+    parts = binning._grid_split(pos, radius, splits)
     assert serial[:2] == parts[:2]
     for a, b in zip(serial[2:], parts[2:], strict=True):
         assert np.array_equal(a, b)
@@ -138,12 +139,12 @@ def test_binning_and_reordering_in_parts_equal_the_serial_passes(splits: int) ->
     flags = rng.integers(0, 255, (k.FLAG_ROWS, n), np.uint8)
     ext = rng.permutation(n).astype(np.int64)
     plain = (pos.copy(), np.zeros((2, n)), vel.copy(), body.copy(), flags.copy(), ext.copy())
-    k._reorder(order, *plain)
+    binning._reorder(order, *plain)
     split = (pos.copy(), np.zeros((2, n)), vel.copy(), body.copy(), flags.copy(), ext.copy())
-    cells = k._reorder_split(order, serial[2], *split, splits)
+    cells = binning._reorder_split(order, serial[2], *split, splits)
     for a, b in zip(plain, split, strict=True):
         if a.shape[0] == k.BODY_ROWS:  # the force rows are a step's own: not carried
-            a, b = a[: k.BODY_KEPT], b[: k.BODY_KEPT]
+            a, b = a[: binning.BODY_KEPT], b[: binning.BODY_KEPT]
         assert np.array_equal(a, b)
     assert np.array_equal(cells, serial[2][order])
     assert np.all(np.diff(cells) >= 0)  # in cell order

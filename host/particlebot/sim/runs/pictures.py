@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import Patch, Rectangle
 
-from particlebot.analysis.simcsv import PublishedRun
+from particlebot.sim.runs.simcsv import PublishedRun
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.world import World
 

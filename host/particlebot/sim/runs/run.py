@@ -26,10 +26,11 @@ from typing import Any
 
 import numpy as np
 
-from particlebot.analysis.simcsv import SimFormatError, read_published_csv
+from particlebot.errors import ParticlebotError
 from particlebot.sim.runs import video
 from particlebot.sim.runs.csvlog import CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
+from particlebot.sim.runs.simcsv import SimFormatError, read_published_csv
 from particlebot.sim.scenarios.build import Built
 from particlebot.sim.scenarios.scenario import PlacementKind, Scenario
 from particlebot.sim.scenarios.toml_file import read_scenario
@@ -49,7 +50,7 @@ CHUNK_WALL_S = 0.25
 """Steps are taken in chunks of about this much wall time: progress and a stop act between."""
 
 
-class RunError(ValueError):
+class RunError(ParticlebotError, ValueError):
     """A run folder that cannot be used: taken, or not a run to resume."""
 
 

@@ -8,6 +8,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from particlebot.errors import ParticlebotError
 from particlebot.sim.runs.pictures import Frame, View, draw_swarm, picture_size
 
 FPS = 10
@@ -15,7 +16,7 @@ FRAME_WIDTH_IN = 9.6
 """960 pixels wide at 100 dpi, as high as the run's view needs."""
 
 
-class VideoError(RuntimeError):
+class VideoError(ParticlebotError, RuntimeError):
     """ffmpeg could not encode the frames."""
 
 

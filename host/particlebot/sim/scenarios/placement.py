@@ -15,6 +15,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
 
+from particlebot.errors import ParticlebotError
+
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
@@ -51,7 +53,7 @@ PUBLISHED_PATIENCE = 200
 PUBLISHED_FIRST_DISC_M = (5.0, 0.0)
 
 
-class PlacementError(ValueError):
+class PlacementError(ParticlebotError, ValueError):
     """Positions that cannot be used: overlapping discs, a damaged file, impossible sizes."""
 
 

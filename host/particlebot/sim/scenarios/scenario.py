@@ -8,6 +8,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Literal
 
+from particlebot.errors import ParticlebotError
 from particlebot.sim.particles.model.firmware import FirmwareSettings
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.world.arena import Circle, Rect
@@ -17,7 +18,7 @@ from particlebot.sim.world.params import PhysicsParams
 Precision = Literal["float64", "float32"]
 
 
-class ScenarioError(ValueError):
+class ScenarioError(ParticlebotError, ValueError):
     """A scenario that cannot run, said in one line: file, line, key, what is wrong."""
 
 

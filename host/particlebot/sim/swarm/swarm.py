@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 
 from particlebot.closing import ClosedOnExit
-from particlebot.logs.world import bodies_record, radii_record, scene_record
 from particlebot.protocol import UNASSIGNED_ID, DecodeStats, Frame, StreamDecoder
 from particlebot.sim.air.medium import BASE, NOISE, Medium, Reception
 from particlebot.sim.clock import CPU_HZ, cycles, seconds
@@ -34,6 +33,7 @@ from particlebot.sim.particles.native.particles import (
 from particlebot.sim.scenarios.build import build_world
 from particlebot.sim.swarm.config import TRUTH_BODIES_S, TRUTH_RADII_S, Level, SwarmConfig
 from particlebot.sim.swarm.pacing import Paced, PacedRunner
+from particlebot.sim.swarm.records import bodies_record, radii_record, scene_record
 from particlebot.sim.world.light import LightField, ShadowMode
 from particlebot.sim.world.photocells import Photocells
 
@@ -51,7 +51,7 @@ first servo steps of a cycle, or of a servo hold, go further)."""
 BaseListener = Callable[[int, bytes, float], None]
 """listener(source_index, data, time_s): a packet the base station's radio hands over."""
 TruthListener = Callable[[dict[str, Any], float], None]
-"""listener(record, time_s): the world's truth (particlebot.logs.world records) at time_s."""
+"""listener(record, time_s): the world's truth (particlebot.sim.swarm.records records) at time_s."""
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import (
     BASE_STATION_ID,
     BROADCAST_ID,
@@ -25,7 +26,7 @@ _BOOT_US = 100_000
 _STEP_US = 100_000
 
 
-class BootError(RuntimeError):
+class BootError(ParticlebotError, RuntimeError):
     """The image never answered as a particle does."""
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import IO
 
 from particlebot.closing import ClosedOnExit
+from particlebot.errors import ParticlebotError
 from particlebot.sim.clock import CPU_HZ
 
 SENSOR_COUNT = 6
@@ -84,7 +85,7 @@ class Reset:
         return bool(self.mcusr & MCUSR_WATCHDOG)
 
 
-class HarnessError(RuntimeError):
+class HarnessError(ParticlebotError, RuntimeError):
     """The harness process refused a command, died, or said something unexpected."""
 
 

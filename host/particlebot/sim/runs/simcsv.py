@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.errors import ParticlebotError
+
 FloatArray = npt.NDArray[np.float64]
 
 CENTROID_COLUMNS = ("Centroid X", "Centroid Y")
@@ -24,7 +26,7 @@ DISTANCE_COLUMN = "Distance"
 _PARTICLE_COLUMN = re.compile(r"^Particlebot_(\d+)_(xpos|ypos|xvel|yvel|rad)$")
 
 
-class SimFormatError(ValueError):
+class SimFormatError(ParticlebotError, ValueError):
     """Not a file in the published simulator's format, or a damaged one."""
 
 

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.errors import ParticlebotError
+
 FloatArray = npt.NDArray[np.float64]
 Record = dict[str, Any]
 
@@ -98,7 +100,7 @@ class WorldTrack:
         return self.x.mean(axis=1), self.y.mean(axis=1)
 
 
-class WorldRecordError(ValueError):
+class WorldRecordError(ParticlebotError, ValueError):
     """World records that do not fit together (a damaged log)."""
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, Self
 
 from particlebot.options import NON_NEGATIVE, POSITIVE, SWITCH, Bounds, OptionError, parse_float
-from particlebot.radio import (
+from particlebot.radio.base import (
     InvalidRadioUrlError,
     LinkState,
     Packet,

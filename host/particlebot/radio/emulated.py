@@ -1,8 +1,8 @@
 """The base station on the air of emulated particles, the flashed image in simavr, in the world of
 a scenario: emulated://K?scenario=line|blob|PATH&loss=0.2&delay_ms=5&speed=1&elf=PATH
 &base_baud=9600&buffer=256 and every option virtual:// takes. K particles (ids 1..K), each the
-ELF that `make firmware` builds, in tools/sim/particle_sim (`make harness`). speed=max runs as
-fast as the machine allows."""
+ELF that `make firmware` builds (or a wheel carries), in the simavr harness. speed=max runs as fast
+as the machine allows."""
 
 from __future__ import annotations
 

@@ -12,12 +12,12 @@ from typing import Self
 from particlebot.options import POSITIVE, Bounds
 from particlebot.radio import RadioUrl
 from particlebot.radio._simulated import SwarmRadio, swarm_config_from_url
+from particlebot.radio.sizes import EMULATED_MAX_PARTICLES
 from particlebot.sim.swarm.config import Level, SwarmConfig
 
 OPTIONS = frozenset({"elf", "base_baud", "buffer"})
 """What emulated:// takes on top of virtual://'s options."""
-MAX_PARTICLES = 32
-"""One harness process each; the firmware records at most 32 senders per round anyway."""
+MAX_PARTICLES = EMULATED_MAX_PARTICLES
 DEFAULT_PARTICLES = 5
 
 

@@ -3,6 +3,10 @@
 Scripts drive a swarm through `particlebot.Swarm` (see README, "Experiments as code").
 """
 
+__version__ = "0.1.0"
+"""The package's version, in this one place: pyproject.toml reads it (setuptools' dynamic
+version) and `particlebot --version` prints it."""
+
 from particlebot.protocol import Method, Param, State
 from particlebot.radio import RadioError
 from particlebot.swarm.api import Swarm

@@ -3,9 +3,10 @@
 Scripts drive a swarm through `particlebot.Swarm` (see README, "Experiments as code").
 """
 
-__version__ = "0.1.0"
-"""The package's version, in this one place: pyproject.toml reads it (setuptools' dynamic
-version) and `particlebot --version` prints it."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from particlebot.protocol import Method, Param, State
 from particlebot.radio import RadioError
@@ -23,6 +24,23 @@ from particlebot.swarm.results import (
     Unconfirmed,
 )
 
+__version__ = "0.1.0"
+"""The package's version, in this one place: pyproject.toml reads it (setuptools' dynamic
+version) and `particlebot --version` prints it."""
+
+if TYPE_CHECKING:
+    from particlebot.sim.runs.tables import RunTables
+
+
+def read_run(folder: str | Path) -> RunTables:
+    """A simulated run's folder as pandas DataFrames: .track (the centroid at every dump
+    interval) and .frames (every body at every frame of trajectory.gsd, else of the
+    snapshots). Imported when called, so that `import particlebot` stays light."""
+    from particlebot.sim.runs.tables import read_run as read
+
+    return read(folder)
+
+
 __all__ = [
     "IdInUse",
     "Method",
@@ -39,4 +57,5 @@ __all__ = [
     "Swarm",
     "SwarmError",
     "Unconfirmed",
+    "read_run",
 ]

@@ -15,6 +15,7 @@ import pytest
 
 from particlebot import resources
 from particlebot.protocol import DEFINITION_HASH
+from tests.sim.conftest import avr_tools_missing
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -73,7 +74,10 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, dic
     return bin_dir, work, env
 
 
+# Installing the dependencies and numba's first compile of the world take minutes on a loaded
+# machine; nothing here waits on a clock, so a long limit only guards against a hang.
 @pytest.mark.e2e
+@pytest.mark.timeout(3600)
 def test_the_installed_package_uses_its_own_artefacts(
     installed: tuple[Path, Path, dict[str, str]],
 ) -> None:
@@ -97,6 +101,7 @@ def test_the_installed_package_uses_its_own_artefacts(
 
 
 @pytest.mark.e2e
+@pytest.mark.timeout(3600)
 def test_demo_simulate_a_swarm_script_and_flash_help_run_outside_the_clone(
     installed: tuple[Path, Path, dict[str, str]],
 ) -> None:
@@ -111,7 +116,7 @@ def test_demo_simulate_a_swarm_script_and_flash_help_run_outside_the_clone(
             "--particles",
             "3",
             "--run-s",
-            "20",
+            "90",
             "--no-animation",
             "--no-log",
         ],
@@ -119,7 +124,7 @@ def test_demo_simulate_a_swarm_script_and_flash_help_run_outside_the_clone(
         env=env,
     )
     figures = json.loads(demo.strip().splitlines()[-1])
-    assert figures
+    assert figures["particles"] == 3 and figures["simulated_s"] >= 90
 
     scenario = run(
         [
@@ -131,11 +136,45 @@ def test_demo_simulate_a_swarm_script_and_flash_help_run_outside_the_clone(
         env=env,
     ).strip()
     assert Path(scenario).is_file()
-    run([particlebot, "simulate", scenario, "--duration", "30", "-o", "run"], cwd=work, env=env)
-    assert (work / "run" / "run.csv").is_file()
+    simulate = [particlebot, "simulate", scenario, "--duration", "30"]
+    simulate += ["--dump-interval", "10", "--gsd", "-o", "run"]
+    run(simulate, cwd=work, env=env)
+    tables = run(
+        [
+            str(bin_dir / "python"),
+            "-c",
+            "import particlebot; t = particlebot.read_run('run');"
+            "print(t.source, len(t.track), sorted(set(t.frames['kind'])))",
+        ],
+        cwd=work,
+        env=env,
+    )
+    assert tables.split()[:2] == ["trajectory.gsd", "4"]  # rows at 0, 10, 20 and 30 s
+    assert "'object'" in tables and "'particle'" in tables
 
     (work / "swarm.py").write_text(SWARM_SCRIPT, encoding="utf-8")
     printed = run([str(bin_dir / "python"), "swarm.py"], cwd=work, env=env)
     assert "particles 3 stopped 3" in printed
 
     assert "--firmware" in run([particlebot, "flash", "--help"], cwd=work, env=env)
+
+
+@pytest.mark.e2e
+@pytest.mark.simavr
+@pytest.mark.timeout(3600)
+def test_emulated_particles_build_their_harness_into_the_cache(
+    installed: tuple[Path, Path, dict[str, str]],
+) -> None:
+    if avr_tools_missing() is not None:
+        pytest.skip("simavr is not installed")
+    bin_dir, work, env = installed
+    script = (
+        "from particlebot.sim.particles.emulated.harness import ParticleSim, ensure_harness\n"
+        "print(ensure_harness())\n"
+        "with ParticleSim() as sim:\n"
+        "    sim.run_for(20_000)\n"
+        "    print(sim.cycle)\n"
+    )
+    harness, cycle = run([str(bin_dir / "python"), "-c", script], cwd=work, env=env).split()
+    assert Path(harness).parent == Path(env["PARTICLEBOT_CACHE_DIR"])
+    assert int(cycle) >= 20_000 * 8

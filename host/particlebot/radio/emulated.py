@@ -9,10 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Self
 
+from particlebot import resources
 from particlebot.options import POSITIVE, Bounds
 from particlebot.radio import RadioUrl
 from particlebot.radio._simulated import SwarmRadio, swarm_config_from_url
 from particlebot.radio.sizes import EMULATED_MAX_PARTICLES
+from particlebot.sim.particles.emulated.harness import HarnessBuildError
 from particlebot.sim.swarm.config import Level, SwarmConfig
 
 OPTIONS = frozenset({"elf", "base_baud", "buffer"})
@@ -46,6 +48,10 @@ class EmulatedRadio(SwarmRadio):
 
     @staticmethod
     def missing_advice(exc: BaseException) -> str:
+        if isinstance(exc, HarnessBuildError):  # names the packages to install
+            return str(exc)
+        if resources.source_root() is None:
+            return f"The emulated particles cannot start: {exc}"
         return (
             f"The emulated particles need the firmware image and the simavr harness ({exc}). "
             "Run: make firmware harness (after `make system-deps` for the AVR tools)"

@@ -38,3 +38,19 @@ def test_missing_system_packages_are_named_in_one_line(
     assert "\n" not in message
     assert "libsimavr-dev" in message and "libelf-dev" in message and "gcc" in message
     assert not (tmp_path / "particle_sim").exists()
+
+
+def test_emulated_radio_without_the_build_tools_says_what_to_install(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from particlebot import resources
+    from particlebot.radio import RadioError, open_radio
+
+    monkeypatch.delenv("PARTICLEBOT_SIM_HARNESS", raising=False)
+    monkeypatch.setattr(resources, "harness", lambda: tmp_path / "particle_sim")
+    monkeypatch.setattr(shutil, "which", lambda _tool: None)
+    with pytest.raises(RadioError) as raised:
+        open_radio("emulated://1?speed=max")
+    message = str(raised.value)
+    assert message.startswith("emulated particles need the simavr harness")
+    assert "sudo apt-get install gcc pkg-config libsimavr-dev libelf-dev" in message

@@ -249,7 +249,7 @@ SIM_CC := gcc
 SIM_CFLAGS := -std=gnu11 -O2 -Wall -Wextra -Werror
 
 # simavr's headers are included as system headers so that -Wextra judges only our code.
-$(BUILD)/sim/particle_sim: tools/sim/particle_sim.c | $(BUILD)/.system-deps
+$(BUILD)/sim/particle_sim: host/particlebot/sim/particles/emulated/particle_sim.c | $(BUILD)/.system-deps
 	@mkdir -p $(@D)
 	$(SIM_CC) $(SIM_CFLAGS) $$(pkg-config --cflags-only-I simavr | sed 's/-I/-isystem /g') \
 	  -o $@ $< $$(pkg-config --libs simavr) -lelf
@@ -262,12 +262,12 @@ lint: $(VENV)/.installed $(BUILD)/.system-deps
 	$(VENV)/bin/ruff check host tests tools benchmarks research docs/_hooks
 	$(VENV)/bin/ruff format --check host tests tools benchmarks research docs/_hooks
 	$(VENV)/bin/mypy
-	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
+	clang-format --dry-run --Werror $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'host/*.c')
 
 format: $(VENV)/.installed
 	$(VENV)/bin/ruff format host tests tools benchmarks research docs/_hooks
 	$(VENV)/bin/ruff check --fix host tests tools benchmarks research docs/_hooks
-	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'tools/*.c')
+	clang-format -i $$(git ls-files 'firmware/*.cpp' 'firmware/*.h' 'host/*.c')
 
 ASAN_RUNTIME = $(shell $(NATIVE_CXX) -print-file-name=libasan.so)
 

@@ -3,6 +3,11 @@
 Scripts drive a swarm through `particlebot.Swarm` (see README, "Experiments as code").
 """
 
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 from particlebot.errors import ParticlebotError
 from particlebot.protocol import Method, Param, State
 from particlebot.radio import RadioError
@@ -20,6 +25,23 @@ from particlebot.swarm.results import (
     SwarmError,
     Unconfirmed,
 )
+
+__version__ = "0.1.0"
+"""The package's version, in this one place: pyproject.toml reads it (setuptools' dynamic
+version) and `particlebot --version` prints it."""
+
+if TYPE_CHECKING:
+    from particlebot.sim.runs.tables import RunTables
+
+
+def read_run(folder: str | Path) -> RunTables:
+    """A simulated run's folder as pandas DataFrames: .track (the centroid at every dump
+    interval) and .frames (every body at every frame of trajectory.gsd, else of the
+    snapshots). Imported when called, so that `import particlebot` stays light."""
+    from particlebot.sim.runs.tables import read_run as read
+
+    return read(folder)
+
 
 __all__ = [
     "IdInUse",
@@ -39,4 +61,5 @@ __all__ = [
     "SwarmError",
     "Unconfirmed",
     "Verdict",
+    "read_run",
 ]

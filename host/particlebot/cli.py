@@ -8,9 +8,9 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
-from importlib.metadata import PackageNotFoundError, version
 from typing import NoReturn, Protocol, cast
 
+from particlebot import __version__, resources
 from particlebot.protocol import DEFINITION_HASH
 
 # Subcommand -> what it does. Each is the module particlebot.commands.<name> (a dash becomes an
@@ -53,11 +53,26 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"particlebot: {where}{message} (see {self.prog} --help)\n")
 
 
-def package_version() -> str:
-    try:
-        return version("particlebot")
-    except PackageNotFoundError:  # running from a source tree that was never installed
-        return "unknown"
+def version_text() -> str:
+    """What --version prints: the package's version, the protocol definition hash the host
+    speaks, and the firmware image flash and emulated particles use by default."""
+    image = resources.firmware_image()
+    manifest = resources.firmware_manifest()
+    if manifest is not None:
+        firmware = f"firmware image {image} (definition {manifest.definition_hash:08X})"
+    elif image.exists():
+        firmware = f"firmware image {image}"
+    else:
+        firmware = f"no firmware image at {image}"
+    return f"particlebot {__version__} (protocol definition {DEFINITION_HASH:08X})\n{firmware}"
+
+
+class _PrintVersion(argparse.Action):
+    """--version as written by version_text(), line breaks kept (argparse's own would wrap)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        print(version_text())
+        parser.exit(0)
 
 
 class Command(Protocol):
@@ -79,9 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=f"protocol definition hash {DEFINITION_HASH:08X}",
     )
     parser.add_argument(
-        "--version",
-        action="version",
-        version=f"particlebot {package_version()} (protocol definition {DEFINITION_HASH:08X})",
+        "--version", action=_PrintVersion, nargs=0, help="show the versions and exit"
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, summary in COMMANDS.items():

@@ -5,13 +5,15 @@ from __future__ import annotations
 import asyncio
 import csv
 import json
-from importlib.metadata import version
+import tomllib
 from pathlib import Path
 
 import pytest
 from rich.text import Text
 from textual.widgets import Static
 
+import particlebot
+from particlebot import resources
 from particlebot.cli import main
 from particlebot.commands.demo import DemoScript
 from particlebot.console.app import ConsoleApp
@@ -19,6 +21,8 @@ from particlebot.protocol import DEFINITION_HASH
 from particlebot.radio import open_radio
 from particlebot.radio.virtual import VirtualRadio
 from particlebot.swarm.api import Swarm
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.e2e
@@ -133,6 +137,18 @@ def test_version_names_the_package_and_the_protocol(capsys: pytest.CaptureFixtur
     with pytest.raises(SystemExit) as ended:
         main(["--version"])
     assert ended.value.code == 0
-    assert capsys.readouterr().out == (
-        f"particlebot {version('particlebot')} (protocol definition {DEFINITION_HASH:08X})\n"
+    first, second = capsys.readouterr().out.splitlines()
+    assert (
+        first
+        == f"particlebot {particlebot.__version__} (protocol definition {DEFINITION_HASH:08X})"
     )
+    # A clone flashes what `make firmware` built; a wheel names the definition its image speaks.
+    assert second == f"firmware image {resources.firmware_image()}"
+
+
+def test_the_version_comes_from_one_place() -> None:
+    project = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
+    assert "version" not in project["project"] and "version" in project["project"]["dynamic"]
+    assert project["tool"]["setuptools"]["dynamic"]["version"] == {
+        "attr": "particlebot.__version__"
+    }

@@ -7,6 +7,7 @@ import os
 import stat
 import threading
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -31,7 +32,6 @@ from particlebot.fleet import (
     updating_fleet,
 )
 from particlebot.fleet import store as fleet_store
-from particlebot.fleet.toml_writer import string
 
 WHEN = dt.datetime(2025, 3, 1, 12, 30, tzinfo=dt.UTC)
 KEY_HEX = "00112233445566778899AABBCCDDEEFF"
@@ -254,8 +254,67 @@ def test_creating_over_an_existing_fleet_is_refused(tmp_path: Path) -> None:
 
 
 @given(st.text())
-def test_any_string_comes_back_from_toml_unchanged(text: str) -> None:
-    assert tomllib.loads(f"value = {string(text)}")["value"] == text
+def test_any_note_comes_back_from_the_file_unchanged(text: str) -> None:
+    fleet = Fleet.new()
+    fleet.record(ParticleRecord(5, note=text or None))
+    loaded = fleet_store._fleet_from(tomllib.loads(render(fleet)))
+    assert loaded.particles[5].note == (text or None)
+
+
+HAND_EDITED = f"""\
+# Fleet of the lamp-room experiments: ask Ana before changing the key.
+version = 1
+
+[radio]
+channel = 0x0C  # the quiet channel in room 2.14
+pan_id = 0x1A2B
+key = "{KEY_HEX}"
+
+# Particle 3 lost a magnet on 12 March; it is kept for the calibration runs.
+[particles.3]
+note = 'left wheel "sticks"'
+board_serial = "FIO-3"
+definition_hash = 0xDCF5A94F
+
+[particles.3.calibration]
+SERVO_CAL_8 = 1750  # measured twice
+SERVO_CAL_0 = 1000
+"""
+
+
+def test_a_hand_edited_file_keeps_its_comments_order_and_hex_through_rewrites(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "fleet.toml"
+    path.write_text(HAND_EDITED, encoding="utf-8")
+    path.chmod(0o600)
+    with updating_fleet(path) as fleet:  # nothing changed: the file comes back byte for byte
+        pass
+    assert path.read_text(encoding="utf-8") == HAND_EDITED
+    with updating_fleet(path) as fleet:
+        fleet.record(ParticleRecord(7, board_serial="FIO-7", definition_hash=0x0000BEEF))
+        particle = fleet.particles[3]
+        fleet.record(replace(particle, calibration={**particle.calibration, "SERVO_CAL_8": 1760}))
+    with updating_fleet(path) as fleet:
+        fleet.pan_id = 0x2B3C
+    text = path.read_text(encoding="utf-8")
+    lines = text.splitlines()
+    for comment in (
+        "# Fleet of the lamp-room experiments: ask Ana before changing the key.",
+        "channel = 0x0C  # the quiet channel in room 2.14",
+        "# Particle 3 lost a magnet on 12 March; it is kept for the calibration runs.",
+        "SERVO_CAL_8 = 1760  # measured twice",
+    ):
+        assert comment in lines
+    assert "pan_id = 0x2B3C" in lines and "definition_hash = 0x0000BEEF" in lines
+    # The researcher's key order stays; the new particle comes after the old one.
+    assert text.index("channel =") < text.index("pan_id =") < text.index("key =")
+    assert text.index("note =") < text.index("board_serial =")
+    assert text.index("SERVO_CAL_8") < text.index("SERVO_CAL_0")
+    assert text.index("[particles.3]") < text.index("[particles.7]")
+    loaded = load_fleet(path)
+    assert loaded.pan_id == 0x2B3C and loaded.particles[7].definition_hash == 0xBEEF
+    assert loaded.particles[3].calibration == {"SERVO_CAL_8": 1760, "SERVO_CAL_0": 1000}
 
 
 @given(st.dictionaries(st.text(min_size=1), st.integers(-(2**63), 2**63 - 1), max_size=5))

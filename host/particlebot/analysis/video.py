@@ -1,4 +1,5 @@
-"""Reading and writing videos (mp4, avi) through OpenCV, with errors a person can act on."""
+"""Reading videos (mp4, avi) through OpenCV, with errors a person can act on; writing them is
+particlebot.videowriter's (H.264 through ffmpeg), re-exported here."""
 
 from __future__ import annotations
 
@@ -11,21 +12,16 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.closing import ClosedOnExit
-from particlebot.errors import ParticlebotError
+from particlebot.videowriter import VideoError, VideoWriter
+
+__all__ = ["Image", "VideoError", "VideoSource", "VideoWriter", "as_image", "open_video"]
 
 Image = npt.NDArray[np.uint8]
-
-# What each container gets: mp4v and MJPG are written by every OpenCV build's bundled FFmpeg.
-FOURCC_BY_SUFFIX = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".avi": "MJPG"}
 
 
 def as_image(array: object) -> Image:
     """An OpenCV result as the uint8 image it is (no copy); OpenCV's stubs type it loosely."""
     return np.asarray(array, dtype=np.uint8)
-
-
-class VideoError(ParticlebotError, ValueError):
-    """A video that cannot be read or written, said in one line."""
 
 
 @dataclass
@@ -85,27 +81,3 @@ def open_video(path: Path, fps: float | None = None) -> VideoSource:
     count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
     height, width = first.shape[:2]
     return VideoSource(path, capture, float(rate), (width, height), max(count, 0), as_image(first))
-
-
-class VideoWriter(ClosedOnExit):
-    """Writes BGR frames of one size to .mp4 or .avi."""
-
-    def __init__(self, path: Path, fps: float, size: tuple[int, int]) -> None:
-        fourcc = FOURCC_BY_SUFFIX.get(path.suffix.lower())
-        if fourcc is None:
-            raise VideoError(f"write videos as .mp4 or .avi, not {path.name}")
-        if not path.parent.is_dir():
-            raise VideoError(f"no such folder for {path}")
-        self.path = path
-        self.size = size
-        self._writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*fourcc), fps, size)
-        if not self._writer.isOpened():
-            raise VideoError(f"cannot write {path}")
-
-    def write(self, frame: Image) -> None:
-        if (frame.shape[1], frame.shape[0]) != self.size:
-            frame = as_image(cv2.resize(frame, self.size, interpolation=cv2.INTER_AREA))
-        self._writer.write(frame)
-
-    def close(self) -> None:
-        self._writer.release()

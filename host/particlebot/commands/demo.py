@@ -10,6 +10,7 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from rich.text import Text
@@ -21,10 +22,12 @@ from particlebot.console.worldmap import MapParticle, render_map
 from particlebot.logs.jsonl import LogError
 from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
 from particlebot.radio import RadioError
-from particlebot.radio.simulated import SwarmRadio
-from particlebot.radio.virtual import MAX_PARTICLES
+from particlebot.radio.sizes import VIRTUAL_MAX_PARTICLES as MAX_PARTICLES
 from particlebot.swarm.api import METHODS, Swarm, method_letter, method_of
 from particlebot.swarm.results import ParticlesMissing, StopReport, SwarmError
+
+if TYPE_CHECKING:  # the simulator is imported where the demo runs, so that --help stays quick
+    from particlebot.radio.simulated import SwarmRadio
 
 PROGRESS_S = 30.0
 """Without a terminal the run reports how far the swarm has come every 30 s of its time."""
@@ -52,6 +55,8 @@ class DemoScript:
 
     @property
     def radio(self) -> SwarmRadio:
+        from particlebot.radio.simulated import SwarmRadio
+
         radio = self.swarm.radio
         assert isinstance(radio, SwarmRadio)
         return radio
@@ -294,9 +299,7 @@ def _run_swarm(
             print(script.stop_report.text)
         if script.failure:
             print(f"FAILED: {script.failure}")
-        radio = swarm.radio
-        assert isinstance(radio, SwarmRadio)
-        print(f"simulated {radio.swarm.time_s:.1f} s")
+        print(f"simulated {script.radio.swarm.time_s:.1f} s")
     return code, log
 
 

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from particlebot import resources
 from particlebot.commands._common import fail
 from particlebot.errors import ParticlebotError
 from particlebot.fleet import FleetError, FleetFileError, check_id, load_fleet
@@ -17,8 +18,8 @@ if TYPE_CHECKING:
     from particlebot.provision.flashing import Flasher, FlashPlan, Timing, Uploader
     from particlebot.provision.image import FirmwareImage
 
-# What `make firmware` builds in this checkout.
-DEFAULT_IMAGE = Path(__file__).resolve().parents[3] / "build" / "firmware" / "particle.hex"
+# What `make firmware` builds in a clone, or the image an installed wheel carries.
+DEFAULT_IMAGE = resources.firmware_image()
 
 
 class UsageError(ParticlebotError, ValueError):
@@ -39,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--firmware",
         type=Path,
         default=DEFAULT_IMAGE,
-        help="Intel HEX image (default: what `make firmware` built)",
+        help=f"Intel HEX image (default: {DEFAULT_IMAGE})",
     )
     parser.add_argument("--fleet", type=Path, default=Path("fleet.toml"), help="fleet file")
     parser.add_argument(

@@ -14,7 +14,6 @@ from particlebot.experiments.plan import (
     is_simulated,
     load_experiment,
 )
-from particlebot.experiments.runner import Runner, expected_particles
 from particlebot.radio import RadioError
 from particlebot.swarm.api import method_letter
 
@@ -31,6 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # The runner brings the simulator along: imported here, so that --help stays quick.
+    from particlebot.experiments.runner import Runner, expected_particles
+
     try:
         experiment = load_experiment(args.experiment)
     except ExperimentFileError as exc:

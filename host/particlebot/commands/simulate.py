@@ -74,6 +74,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", metavar="RUN_FOLDER", help="default runs/NAME-DATE-TIME")
     parser.add_argument("--video", action="store_true", help="also film the run (MP4 or GIF)")
     parser.add_argument(
+        "--gsd",
+        action="store_true",
+        help="also write every body at every dump interval to trajectory.gsd (HOOMD-blue's GSD, "
+        "which OVITO, freud and MDAnalysis open)",
+    )
+    parser.add_argument(
+        "--xyz", action="store_true", help="also write the trajectory as extended XYZ"
+    )
+    parser.add_argument(
         "--resume",
         metavar="RUN_FOLDER",
         help="continue a stopped run (with --duration: to a new end)",
@@ -196,12 +205,17 @@ def run(args: argparse.Namespace) -> int:
             if args.scenario is not None or _changes(args):
                 raise ScenarioError(
                     "--resume continues a run as it was: give no scenario, and of the flags "
-                    "only --duration (a new end), --video, --threads or --json"
+                    "only --duration (a new end), --video, --gsd, --xyz, --threads or --json"
                 )
             folder = Path(args.resume)
             check_run_folder(folder)
             print(f"resuming {folder} (compiling or loading the kernels)", file=sys.stderr)
-            session = Run.resume(folder, record_video=args.video, duration_s=args.duration)
+            session = Run.resume(
+                folder,
+                record_video=args.video,
+                duration_s=args.duration,
+                trajectory=_trajectory(args),
+            )
         else:
             from particlebot.sim.scenarios.build import build_world
 
@@ -219,7 +233,9 @@ def run(args: argparse.Namespace) -> int:
             for note in built.notes:
                 print(f"note: {note}", file=sys.stderr)
             folder = Path(args.output) if args.output else default_folder(scenario.name)
-            session = Run.start(built, folder, record_video=args.video)
+            session = Run.start(
+                built, folder, record_video=args.video, trajectory=_trajectory(args)
+            )
         summary = _advance(session)
     except (ScenarioError, RunError) as exc:
         return fail(f"simulate: {exc}")
@@ -230,6 +246,10 @@ def run(args: argparse.Namespace) -> int:
         return 130
     _report(summary, args.json)
     return 0 if summary.finished else 130
+
+
+def _trajectory(args: argparse.Namespace) -> tuple[str, ...]:
+    return tuple(kind for kind, asked in (("gsd", args.gsd), ("xyz", args.xyz)) if asked)
 
 
 def _use_threads(threads: int) -> None:

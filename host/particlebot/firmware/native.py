@@ -2,8 +2,8 @@
 
 The virtual particles and the firmware-logic tests drive the very C++ that is flashed onto a
 particle through this module. The library is looked up in this order: the PARTICLEBOT_NATIVE_LIB
-environment variable, then <repo>/build/native/libparticle.so; in a source checkout a missing
-library is built once with `make native`.
+environment variable, then the clone's build/native/libparticle.so or an installed wheel's own
+(particlebot.resources knows which); in a clone a missing library is built once with `make native`.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from particlebot import resources
 from particlebot.closing import ClosedOnExit
 from particlebot.errors import ParticlebotError
 from particlebot.protocol.generated import (
@@ -36,9 +37,7 @@ _MAX_FRAME = MAX_PAYLOAD + FRAME_OVERHEAD
 
 _log = logging.getLogger(__name__)
 
-ENV_VAR = "PARTICLEBOT_NATIVE_LIB"
-_REPO_ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_LIBRARY = _REPO_ROOT / "build" / "native" / "libparticle.so"
+ENV_VAR = resources.ENV_NATIVE_LIB
 
 
 class NativeLibraryError(ParticlebotError, OSError):
@@ -134,8 +133,7 @@ def _build_once(root: Path) -> None:
 
 def library_path() -> Path:
     """Where the library is looked for (it may not exist yet)."""
-    override = os.environ.get(ENV_VAR)
-    return Path(override) if override else DEFAULT_LIBRARY
+    return resources.native_library()
 
 
 def load_library() -> ctypes.CDLL:
@@ -145,13 +143,17 @@ def load_library() -> ctypes.CDLL:
         if _library is not None:
             return _library
         path = library_path()
-        if not path.exists() and ENV_VAR not in os.environ and (_REPO_ROOT / "Makefile").exists():
-            _build_once(_REPO_ROOT)
+        root = resources.source_root()
+        if not path.exists() and ENV_VAR not in os.environ and root is not None:
+            _build_once(root)
         if not path.exists():
-            raise NativeLibraryError(
-                f"native firmware library not found at {path}: run `make native`"
-                + (f" or fix {ENV_VAR}" if ENV_VAR in os.environ else "")
-            )
+            if ENV_VAR in os.environ:
+                advice = f"fix {ENV_VAR}"
+            elif root is not None:
+                advice = "run `make native`"
+            else:
+                advice = f"reinstall particlebot from a platform wheel, or set {ENV_VAR}"
+            raise NativeLibraryError(f"native firmware library not found at {path}: {advice}")
         try:
             lib = ctypes.CDLL(str(path))
             _declare(lib)

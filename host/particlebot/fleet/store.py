@@ -15,9 +15,14 @@ import os
 import stat
 import tempfile
 import tomllib
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, MutableMapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import tomlkit
+import tomlkit.exceptions
+from tomlkit.items import Integer, Item, Trivia
 
 from particlebot.errors import ParticlebotError
 from particlebot.fleet.model import (
@@ -28,7 +33,6 @@ from particlebot.fleet.model import (
     ParticleRecord,
     PhotocellLaw,
 )
-from particlebot.fleet.toml_writer import Hex, Table, Value, dumps
 
 try:
     import fcntl
@@ -42,7 +46,7 @@ PRIVATE_MODE = 0o600
 _HEADER = """\
 particlebot fleet file: the radio network of one experiment and every particle in it.
 Written by `particlebot fleet init`, `particlebot flash`, `particlebot radio setup` and
-`particlebot calibrate`; values may be edited by hand (comments are not kept). It holds the
+`particlebot calibrate`; values may be edited by hand, and comments are kept. It holds the
 radios' AES key: keep it private (mode 0600, which the tools insist on) and out of version
 control."""
 
@@ -210,61 +214,139 @@ def _time(table: Mapping[str, Any], name: str, where: str) -> dt.datetime | None
 # ---- writing -------------------------------------------------------------------------------------
 
 
-def render(fleet: Fleet) -> str:
-    """The fleet as the text of a fleet file."""
-    tables = [
-        Table(
-            ["radio"],
+@dataclass(frozen=True)
+class Hex:
+    """An integer written in hexadecimal with at least `digits` digits (TOML reads it as int)."""
+
+    value: int
+    digits: int
+
+
+Value = str | int | float | bool | Hex | dt.datetime
+Tableish = MutableMapping[str, Any]
+"""A TOML document or table as tomlkit gives it (a mapping that remembers its layout)."""
+
+
+def render(fleet: Fleet, previous: str | None = None) -> str:
+    """The fleet as the text of a fleet file. With previous (the file's text as it is now), the
+    file is changed in place: a value that did not change keeps its spelling, and comments, key
+    order and blank lines a person wrote stay where they are."""
+    document = tomlkit.parse(previous) if previous else _new_document()
+    _merge(document, {"version": FORMAT_VERSION})
+    radio: dict[str, Value | None] = {
+        "pan_id": Hex(fleet.pan_id, 4),
+        "channel": Hex(fleet.channel, 2),
+        "key": fleet.key.secret_hex(),
+    }
+    _merge(_layout_table(document, "radio"), radio)
+    base = fleet.base_station
+    if base is None:
+        document.pop("base_station", None)
+    else:
+        values: dict[str, Value | None] = {
+            "radio_address": base.radio_address,
+            "radio_configured_at": base.radio_configured_at,
+        }
+        _merge(_layout_table(document, "base_station"), values)
+    law = fleet.photocells
+    if law is None:
+        document.pop("photocells", None)
+    else:
+        cells: dict[str, Value | None] = {
+            "scale": law.scale,
+            "unit": law.unit,
+            "calibrated_at": law.calibrated_at,
+        }
+        _merge(_layout_table(document, "photocells"), cells)
+    roster = [str(particle_id) for particle_id in fleet.roster_ids()]
+    if not roster:
+        document.pop("particles", None)
+        return tomlkit.dumps(document)
+    particles = _layout_table(document, "particles", super_table=True)
+    for name in [name for name in particles if name not in roster]:
+        del particles[name]
+    for particle_id, name in zip(fleet.roster_ids(), roster, strict=True):
+        particle = fleet.particles[particle_id]
+        hashed = particle.definition_hash
+        table = _layout_table(particles, name)
+        _merge(
+            table,
             {
-                "pan_id": Hex(fleet.pan_id, 4),
-                "channel": Hex(fleet.channel, 2),
-                "key": fleet.key.secret_hex(),
+                "board_serial": particle.board_serial,
+                "radio_address": particle.radio_address,
+                "definition_hash": None if hashed is None else Hex(hashed, 8),
+                "image_sha256": particle.image_sha256,
+                "flashed_at": particle.flashed_at,
+                "radio_configured_at": particle.radio_configured_at,
+                "note": particle.note,
             },
         )
-    ]
-    if fleet.base_station is not None:
-        base = fleet.base_station
-        tables.append(
-            Table(
-                ["base_station"],
-                {
-                    "radio_address": base.radio_address,
-                    "radio_configured_at": base.radio_configured_at,
-                },
-            )
-        )
-    if fleet.photocells is not None:
-        law = fleet.photocells
-        tables.append(
-            Table(
-                ["photocells"],
-                {"scale": law.scale, "unit": law.unit, "calibrated_at": law.calibrated_at},
-            )
-        )
-    for particle_id in fleet.roster_ids():
-        particle = fleet.particles[particle_id]
-        values: dict[str, Value | None] = {
-            "board_serial": particle.board_serial,
-            "radio_address": particle.radio_address,
-            "definition_hash": None
-            if particle.definition_hash is None
-            else Hex(particle.definition_hash, 8),
-            "image_sha256": particle.image_sha256,
-            "flashed_at": particle.flashed_at,
-            "radio_configured_at": particle.radio_configured_at,
-            "note": particle.note,
-        }
-        tables.append(Table(["particles", str(particle_id)], values))
         if particle.calibration:
-            tables.append(
-                Table(["particles", str(particle_id), "calibration"], dict(particle.calibration))
+            _merge(
+                _layout_table(table, "calibration"), dict(particle.calibration), drop_others=True
             )
-    return dumps(tables, top={"version": FORMAT_VERSION}, comment=_HEADER)
+        else:
+            table.pop("calibration", None)
+    return tomlkit.dumps(document)
+
+
+def _new_document() -> tomlkit.TOMLDocument:
+    document = tomlkit.document()
+    for line in _HEADER.splitlines():
+        document.add(tomlkit.comment(line))
+    document.add(tomlkit.nl())
+    return document
+
+
+def _layout_table(parent: Tableish, name: str, *, super_table: bool = False) -> Tableish:
+    """parent's table name, added at the end when it is not there yet."""
+    if name not in parent:
+        parent[name] = tomlkit.table(is_super_table=super_table or None)
+    table = parent[name]
+    assert isinstance(table, MutableMapping)
+    return table
+
+
+def _merge(
+    table: Tableish, values: Mapping[str, Value | None], *, drop_others: bool = False
+) -> None:
+    """Sets each value in table; None removes the key. A key whose value is unchanged is left
+    alone, so that its spelling (decimal or hex, quotes) and comment stay as written. With
+    drop_others, keys not in values go (a calibration table holds exactly what it holds)."""
+    if drop_others:
+        for name in [name for name in table if name not in values]:
+            del table[name]
+    for name, value in values.items():
+        if value is None:
+            table.pop(name, None)
+            continue
+        plain = value.value if isinstance(value, Hex) else value
+        current = _unwrap(table.get(name))
+        # bool is an int and 1 == 1.0: equal values of another type are written anew.
+        if current == plain and type(current) is type(plain):
+            continue
+        if isinstance(value, Hex):
+            if value.value < 0:
+                raise ValueError("hexadecimal TOML integers cannot be negative")
+            table[name] = Integer(value.value, Trivia(), f"0x{value.value:0{value.digits}X}")
+        else:
+            table[name] = value
+
+
+def _unwrap(item: object) -> object:
+    return item.unwrap() if isinstance(item, Item) else item
 
 
 def save_fleet(fleet: Fleet, path: Path) -> None:
-    """Writes the whole file atomically with mode 0600."""
-    text = render(fleet)
+    """Writes the whole file atomically with mode 0600, keeping what a person wrote in it."""
+    try:
+        previous: str | None = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):  # none yet, or one being replaced whole
+        previous = None
+    try:
+        text = render(fleet, previous)
+    except tomlkit.exceptions.TOMLKitError:  # not TOML: written afresh, as a new file is
+        text = render(fleet)
     directory = path.parent if str(path.parent) else Path(".")
     fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     try:

@@ -7,10 +7,9 @@ from typing import Self
 
 from particlebot.radio.base import RadioUrl
 from particlebot.radio.simulated import SwarmRadio, swarm_config_from_url
+from particlebot.radio.sizes import VIRTUAL_MAX_PARTICLES as MAX_PARTICLES
 from particlebot.sim.swarm.config import Level, SwarmConfig
 
-MAX_PARTICLES = 200
-"""The most particles virtual:// and `particlebot demo` run (their ids are 1..MAX_PARTICLES)."""
 DEFAULT_PARTICLES = 10
 
 

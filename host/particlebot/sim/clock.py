@@ -8,7 +8,8 @@ whole cycles from power-on, as simavr does, and nothing else. The unit is chosen
 - a character on a 9600-baud serial line takes 10 bits = 8,333 1/3 cycles, not a whole number.
   Serial lines are therefore timed in cycles x baud (an exact integer) and a byte is taken to
   have arrived at the first whole cycle at or after its stop bit ends, the same rounding as the
-  simavr harness (tools/sim/particle_sim.c), so the air and the emulated UART agree to the cycle.
+  simavr harness (sim/particles/emulated/particle_sim.c), so the air and the emulated UART agree
+  to the cycle.
 Seconds (floats) appear only at the edges: what a person reads, and the stamps on packets.
 """
 

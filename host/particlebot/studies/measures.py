@@ -6,9 +6,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from particlebot.errors import ParticlebotError
 from particlebot.studies.published import R_MAX_M, R_MIN_M
@@ -99,6 +96,11 @@ class RobotAdvance:
 
     def evaluate(self, setup: WorldSetup, outcome: SimOutcome) -> dict[str, float]:
         xy = outcome.final_xy
+        # scipy is imported where it works, so that `particlebot study --help` does not load it.
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+        from scipy.spatial import cKDTree
+
         pairs = cKDTree(xy).query_pairs(CONTACT_M, output_type="ndarray")
         graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy),) * 2)
         _, labels = connected_components(graph, directed=False)

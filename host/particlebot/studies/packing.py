@@ -6,8 +6,6 @@ from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import minimize
-from scipy.spatial import cKDTree
 
 from particlebot.studies.dpd_table import DPD_DIAMETERS
 from particlebot.studies.published import D_MIN_M
@@ -126,6 +124,10 @@ def _penalised(
 
 def _relaxed(centres: FloatArray, radius: float) -> float:
     """Shrinks the container around centres by penalty continuation; returns a feasible radius."""
+    # scipy is imported where it works, so that `particlebot study --help` does not load it.
+    from scipy.optimize import minimize
+    from scipy.spatial import cKDTree
+
     n = len(centres)
     z = np.append(centres.ravel(), radius)
     for weight in _PENALTIES:
@@ -150,6 +152,8 @@ def _relaxed(centres: FloatArray, radius: float) -> float:
 def _feasible_radius(centres: FloatArray) -> float:
     """The container radius of centres after spreading them just enough that none overlap: the
     penalty leaves overlaps of order 1/weight, and the answer must be a real packing."""
+    from scipy.spatial import cKDTree
+
     nearest = cKDTree(centres).query(centres, k=2)[0][:, 1].min()
     scale = max(1.0, 2.0 / float(nearest))
     return float((np.sqrt((centres**2).sum(axis=1)) * scale).max()) + 1.0

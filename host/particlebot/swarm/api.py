@@ -10,7 +10,7 @@ import threading
 from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
 from types import FrameType, TracebackType
-from typing import Self
+from typing import TYPE_CHECKING, Self
 
 from particlebot.fleet import Fleet, FleetError, FleetFileError, load_fleet, updating_fleet
 from particlebot.logs.jsonl import JsonlWriter, default_log_path
@@ -25,7 +25,6 @@ from particlebot.protocol import (
     Status,
 )
 from particlebot.radio import Radio, RadioError, ReadOnlyRadioError, open_radio, parse_radio_url
-from particlebot.radio.simulated import SwarmRadio
 from particlebot.session import Listener, ReceivedFrame, Session
 from particlebot.swarm.campaigns import CLOCK_SLACK_S, Campaign, ParamQuery, Verdict, ids_text
 from particlebot.swarm.results import (
@@ -42,6 +41,9 @@ from particlebot.swarm.results import (
     not_confirmed_text,
 )
 from particlebot.swarm.tracker import STOP_GRACE_S, IdInUseError, Rename, SwarmTracker
+
+if TYPE_CHECKING:
+    from particlebot.radio.simulated import SwarmRadio
 
 POLL_S = 0.05
 """How often campaigns advance: a STOP copy goes out at most this late (the burst's copies are
@@ -145,9 +147,9 @@ class Swarm:
                 path = default_log_path(folder) if log_name is None else folder / log_name
                 self.log = JsonlWriter(path, radio=radio.url, fsync=fsync, clock=radio.now)
                 self.session.add_listener(self.log)
-                if isinstance(radio, SwarmRadio):
+                if (simulated := _simulated(radio)) is not None:
                     # A simulation knows what no radio can say: where every body is.
-                    radio.add_truth_listener(self.log.write)
+                    simulated.add_truth_listener(self.log.write)
             self.tracker = SwarmTracker(
                 self.session,
                 radio.now,
@@ -163,7 +165,7 @@ class Swarm:
             radio.close()
             raise
         self._closed = threading.Event()
-        speed = radio.speed if isinstance(radio, SwarmRadio) else None
+        speed = simulated.speed if (simulated := _simulated(radio)) is not None else None
         self.poll_wall_s = POLL_S if speed is None or self.stepped else max(0.001, POLL_S / speed)
         """Wall time between two polls while waiting: POLL_S of the radio's time."""
         if not self.stepped:
@@ -578,8 +580,8 @@ class Swarm:
         """Advances everything one step: on a simulation stepped here, POLL_S of its time;
         then confirmations, resends and timeouts. RadioError once the radio has failed."""
         if self.stepped:
-            radio = self.radio
-            assert isinstance(radio, SwarmRadio)
+            radio = _simulated(self.radio)
+            assert radio is not None
             try:
                 with _interrupts_deferred():
                     radio.advance(POLL_S)
@@ -725,20 +727,29 @@ def _move_record(fleet: Fleet, rename: Rename) -> bool:
     return True
 
 
+def _simulated(radio: Radio) -> SwarmRadio | None:
+    """The radio as a simulation's, or None. The simulator is imported here, where a Swarm opens,
+    rather than at the top, so that `import particlebot` and every --help stay light."""
+    from particlebot.radio.simulated import SwarmRadio
+
+    return radio if isinstance(radio, SwarmRadio) else None
+
+
 def _decide_stepping(radio: Radio, stepped: bool | None) -> bool:
     """Whether Swarm's own calls step the simulation: a simulated radio asked to run as fast as
     possible (speed=max), or given without a thread of its own."""
-    if not isinstance(radio, SwarmRadio):
+    simulated = _simulated(radio)
+    if simulated is None:
         if stepped:
             raise ValueError(f"{radio.url} is not a simulation: it cannot be stepped")
         return False
-    if radio.stepped_by_caller:
+    if simulated.stepped_by_caller:
         if stepped is False:
             raise ValueError(f"{radio.url} has no thread to pace it: it must be stepped")
         return True
-    flat_out = radio.speed is not None and math.isinf(radio.speed)
+    flat_out = simulated.speed is not None and math.isinf(simulated.speed)
     if stepped or (stepped is None and flat_out):
-        radio.step_by_caller()
+        simulated.step_by_caller()
         return True
     return False
 

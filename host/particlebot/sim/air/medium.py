@@ -123,7 +123,7 @@ Drop = Callable[[AirPacket, int], bool]
 
 def _line_end(start_scaled: int, count: int, baud: int) -> int:
     """Cycle at which the count-th byte after start_scaled (cycles * baud) has arrived; the same
-    rounding as tools/sim/particle_sim.c, so both agree to the cycle."""
+    rounding as sim/particles/emulated/particle_sim.c, so both agree to the cycle."""
     end_scaled = start_scaled + count * BITS_PER_CHAR * CPU_HZ
     return (end_scaled + baud - 1) // baud
 

@@ -10,6 +10,8 @@ A run folder holds:
   swarm-start.png, swarm.png     the swarm from above at the start and at the end (or stop)
   track.png          the centroid's path and its distance to the lamp
   frames/, <video>   with --video: the frames, then the MP4 or GIF made of them
+  trajectory.gsd     with --gsd: every body at every dump interval (HOOMD-blue's GSD)
+  trajectory.xyz     with --xyz: the same as extended XYZ
   summary.json       the last invocation's figures (as `simulate --json` prints them)
 """
 
@@ -19,7 +21,7 @@ import json
 import os
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -31,6 +33,7 @@ from particlebot.sim.runs import video
 from particlebot.sim.runs.csvlog import CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
 from particlebot.sim.runs.simcsv import SimFormatError, read_published_csv
+from particlebot.sim.runs.trajectory import GSD_FILE, XYZ_FILE, GsdLog, TrajectoryLog, XyzLog
 from particlebot.sim.scenarios.build import Built
 from particlebot.sim.scenarios.scenario import PlacementKind, Scenario
 from particlebot.sim.scenarios.toml_file import read_scenario
@@ -126,6 +129,7 @@ class Run:
         start: tuple[tuple[float, float], float],
         record_video: bool,
         frame_every: int,
+        trajectories: tuple[TrajectoryLog, ...] = (),
     ) -> None:
         self.folder = folder
         self.scenario = scenario
@@ -134,6 +138,7 @@ class Run:
         self.view = view
         self.start_centroid, self.start_distance = start
         self.record_video = record_video
+        self.trajectories = trajectories
         self.total_steps = scenario.steps
         self._frame_every = frame_every
         self._snapshot_step = -1
@@ -149,10 +154,16 @@ class Run:
 
     @classmethod
     def start(
-        cls, built: Built, folder: Path, record_video: bool = False, pictures: bool = True
+        cls,
+        built: Built,
+        folder: Path,
+        record_video: bool = False,
+        pictures: bool = True,
+        trajectory: tuple[str, ...] = (),
     ) -> Run:
         """Creates the run folder (which must not exist, or be empty) and writes the start:
-        scenario files, the CSV's header and first row, a snapshot, the first picture."""
+        scenario files, the CSV's header and first row, a snapshot, the first picture.
+        trajectory: the formats of the whole trajectory to write ("gsd", "xyz")."""
         if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
             raise RunError(f"{folder} exists and is not empty: resume it with --resume {folder}")
         scenario, world = built.scenario, built.world
@@ -173,6 +184,7 @@ class Run:
                 "distance_to_light_start": start[1],
                 "particles": built.particles,
                 "frame_every": frame_every,
+                "trajectory": list(trajectory),
             },
         )
         frame = Frame.of(world)
@@ -182,7 +194,8 @@ class Run:
         csv = CsvLog.create(
             folder / scenario.output.csv_name, scenario.seed, bodies, scenario.output.per_particle
         )
-        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
+        logs = _trajectory_logs(folder, trajectory)
+        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every, logs)
         run.pictures = pictures
         run._dump(world)
         run._snapshot()
@@ -199,10 +212,12 @@ class Run:
         record_video: bool = False,
         duration_s: float | None = None,
         pictures: bool = True,
+        trajectory: tuple[str, ...] = (),
     ) -> Run:
-        """Continues a run from its latest snapshot; the CSV loses the rows written after it
-        (the resumed run writes them again, the same). duration_s moves the run's end (later
-        or earlier, not before the snapshot), and the folder's scenario says so."""
+        """Continues a run from its latest snapshot; the CSV and trajectory files lose what was
+        written after it (the resumed run writes it again, the same). duration_s moves the run's
+        end (later or earlier, not before the snapshot), and the folder's scenario says so.
+        trajectory: formats to write from now on besides those the run writes already."""
         snapshot = check_run_folder(folder)
         scenario = read_scenario(folder / SCENARIO_FILE)
         try:
@@ -219,6 +234,9 @@ class Run:
             )
             frame_every = int(state["frame_every"])
             particles = int(state["particles"])
+            kinds = [str(kind) for kind in state.get("trajectory", [])]
+            if any(kind not in _TRAJECTORY_LOGS for kind in kinds):
+                raise ValueError(f"trajectory formats {kinds}")
         except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
             raise RunError(f"{folder}: damaged run files ({exc})") from None
         if duration_s is not None:
@@ -234,17 +252,21 @@ class Run:
             raise RunError(f"{folder}: its CSV {csv_path.name} is missing")
         csv = CsvLog.resume(csv_path, world.t, scenario.output.per_particle)
         record_video = record_video or bool(state.get("video"))
-        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every)
+        kinds += [kind for kind in trajectory if kind not in kinds]
+        logs = _trajectory_logs(folder, kinds, resume_at=world.steps)
+        run = cls(folder, scenario, world, csv, view, start, record_video, frame_every, logs)
         run.pictures = pictures
         run._snapshot_step = world.steps
-        if record_video and not state.get("video"):
-            _write_state(folder, {**state, "video": True})
+        if (record_video and not state.get("video")) or kinds != state.get("trajectory", []):
+            _write_state(folder, {**state, "video": record_video, "trajectory": kinds})
         return run
 
     # ---- observers -----------------------------------------------------------------------------
 
     def _dump(self, world: World) -> None:
         self.csv.write(world.state(), world.centroid(), world.light_distance())
+        for log in self.trajectories:
+            log.write(world)
 
     def _periodic_snapshot(self, world: World) -> None:
         if world.steps < self.total_steps:
@@ -317,6 +339,8 @@ class Run:
             wall = time.monotonic() - began
             snapshot = self._snapshot()
             self.csv.close()
+            for log in self.trajectories:
+                log.close()
         return self._finish(wall, world.steps - steps_before, snapshot)
 
     def _finish(self, wall_s: float, steps_now: int, snapshot: Path) -> Summary:
@@ -363,6 +387,25 @@ class Run:
         )
         (folder / SUMMARY_FILE).write_text(json.dumps(summary.to_json(), indent=1) + "\n")
         return summary
+
+
+_TRAJECTORY_LOGS: dict[str, tuple[str, type[GsdLog] | type[XyzLog]]] = {
+    "gsd": (GSD_FILE, GsdLog),
+    "xyz": (XYZ_FILE, XyzLog),
+}
+"""Trajectory format -> its file in the run folder and its writer."""
+
+
+def _trajectory_logs(
+    folder: Path, kinds: Sequence[str], resume_at: int | None = None
+) -> tuple[TrajectoryLog, ...]:
+    """The run's trajectory files, new or (resume_at: the snapshot's step) continued."""
+    logs: list[TrajectoryLog] = []
+    for kind in kinds:
+        name, writer = _TRAJECTORY_LOGS[kind]
+        path = folder / name
+        logs.append(writer.create(path) if resume_at is None else writer.resume(path, resume_at))
+    return tuple(logs)
 
 
 def _write_scenario(folder: Path, scenario: Scenario, particles: int) -> None:

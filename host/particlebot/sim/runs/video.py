@@ -10,6 +10,7 @@ from pathlib import Path
 
 from particlebot.errors import ParticlebotError
 from particlebot.sim.runs.pictures import Frame, View, draw_swarm, picture_size
+from particlebot.videowriter import H264_OUTPUT
 
 FPS = 10
 FRAME_WIDTH_IN = 9.6
@@ -58,7 +59,7 @@ def encode(folder: Path, output: Path, fps: int = FPS) -> Path:
         palette = "scale=640:-1:flags=lanczos,split[a][b];[a]palettegen[p];[b][p]paletteuse"
         command += ["-vf", palette]
     else:
-        command += ["-vf", "format=yuv420p", "-c:v", "libx264", "-crf", "23"]
+        command += H264_OUTPUT
     temporary = output.with_name(output.stem + ".part" + output.suffix)
     result = subprocess.run([*command, str(temporary)], capture_output=True, text=True, check=False)
     if result.returncode != 0:

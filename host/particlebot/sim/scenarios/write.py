@@ -8,6 +8,8 @@ from dataclasses import fields
 from enum import Enum
 from typing import Any
 
+import tomlkit
+
 from particlebot.sim.particles.model.firmware import FirmwareSettings
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.scenarios.scenario import (
@@ -150,9 +152,8 @@ def _value(value: Any) -> str:
         if not math.isfinite(value):
             raise ValueError(f"TOML scenarios hold finite numbers only, not {value}")
         return repr(value)
-    if isinstance(value, str):
-        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
-        return f'"{escaped}"'
+    if isinstance(value, str):  # tomlkit escapes what TOML needs escaped (quotes, controls)
+        return tomlkit.string(value).as_string()
     if isinstance(value, list | tuple):
         return "[" + ", ".join(_value(v) for v in value) + "]"
     raise TypeError(f"no TOML for {value!r}")

@@ -20,7 +20,7 @@ from particlebot.protocol import (
     StreamDecoder,
     encode_frame,
 )
-from particlebot.sim.particles.emulated.harness import HarnessError, ParticleSim
+from particlebot.sim.particles.emulated.harness import HarnessBuildError, HarnessError, ParticleSim
 
 _BOOT_US = 100_000
 _STEP_US = 100_000
@@ -86,7 +86,7 @@ def boot_and_ping(
         elf_from_flash(flash, elf)
         try:
             sim = ParticleSim(elf, harness=harness, eeprom=eeprom)
-        except FileNotFoundError as exc:
+        except (FileNotFoundError, HarnessBuildError) as exc:
             raise EmulatorMissingError(str(exc)) from None
         try:
             return _ping(sim, timeout_s)

@@ -1,14 +1,16 @@
-"""One emulated particle: the real firmware ELF in simavr (tools/sim/particle_sim), from Python.
+"""One emulated particle: the real firmware ELF in simavr (particle_sim.c beside it), from Python.
 
 Simulated time advances only inside run_until()/run_for(); between runs the emulated particle is
 frozen, so several ParticleSim objects stay in lockstep when each is run to the same cycle
 (begin_run() on all of them, then finish_run() on all, lets their processes work in parallel).
-The wire protocol is described in tools/sim/README.md.
+The wire protocol is described in particle_sim.md beside this module.
 """
 
 from __future__ import annotations
 
 import os
+import shlex
+import shutil
 import subprocess
 import tempfile
 from collections.abc import Sequence
@@ -16,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
+from particlebot import resources
 from particlebot.closing import ClosedOnExit
 from particlebot.errors import ParticlebotError
 from particlebot.sim.clock import CPU_HZ
@@ -27,18 +30,70 @@ FAULT_PIN = ("D", 1)
 MCUSR_POWER_ON = 0x01
 MCUSR_WATCHDOG = 0x08
 
-_REPO_ROOT = Path(__file__).resolve().parents[5]
+HARNESS_PACKAGES = ("gcc", "pkg-config", "libsimavr-dev", "libelf-dev")
+"""Debian's packages that building the harness needs."""
 
 
 def default_harness() -> Path:
-    """build/sim/particle_sim (made by `make harness`), or $PARTICLEBOT_SIM_HARNESS."""
-    return Path(os.environ.get("PARTICLEBOT_SIM_HARNESS", _REPO_ROOT / "build/sim/particle_sim"))
+    """The harness executable (see particlebot.resources; it may not be built yet)."""
+    return resources.harness()
 
 
 def default_elf(faults: bool = False) -> Path:
-    """The firmware `make firmware` (or, with faults, `make firmware-faults`) builds."""
-    name = "particle-faults.elf" if faults else "particle.elf"
-    return _REPO_ROOT / "build/firmware" / name
+    """The firmware `make firmware` (or, with faults, `make firmware-faults`) builds, or the image
+    an installed wheel carries."""
+    return resources.firmware_image(faults=faults, suffix=".elf")
+
+
+class HarnessBuildError(RuntimeError):
+    """The harness is missing and cannot be built here; the message is one line saying why."""
+
+
+def _missing_build_tools() -> list[str]:
+    missing = [tool for tool in ("gcc", "pkg-config") if shutil.which(tool) is None]
+    if missing:
+        return [*missing, "libsimavr-dev", "libelf-dev"]
+    for module, package in (("simavr", "libsimavr-dev"), ("libelf", "libelf-dev")):
+        found = subprocess.run(["pkg-config", "--exists", module], check=False)
+        if found.returncode != 0:
+            missing.append(package)
+    return missing
+
+
+def ensure_harness(path: Path | None = None) -> Path:
+    """The harness at path (default: default_harness()), compiled from this package's
+    particle_sim.c first when it is not there yet, as `make harness` does in a clone."""
+    path = path or default_harness()
+    if path.exists():
+        return path
+    if resources.ENV_SIM_HARNESS in os.environ:
+        raise HarnessBuildError(f"no simavr harness at {path}: fix {resources.ENV_SIM_HARNESS}")
+    missing = _missing_build_tools()
+    if missing:
+        raise HarnessBuildError(
+            "emulated particles need the simavr harness, built once from "
+            f"{resources.HARNESS_SOURCE.name}; install {', '.join(missing)} first "
+            f"(Debian/Ubuntu: sudo apt-get install {' '.join(HARNESS_PACKAGES)})"
+        )
+    path.parent.mkdir(parents=True, exist_ok=True)
+
+    def pkg_config(*options: str) -> list[str]:
+        command = ["pkg-config", *options, "simavr"]
+        found = subprocess.run(command, capture_output=True, text=True, check=False)
+        return shlex.split(found.stdout)
+
+    # simavr's headers as system headers, so that warnings judge only our code (as the Makefile).
+    includes = [w for i in pkg_config("--cflags-only-I") for w in ("-isystem", i[2:])]
+    # Built beside its final name and renamed, so that a parallel first use never runs half a file.
+    partial = path.with_name(f"{path.name}.{os.getpid()}.partial")
+    command = ["gcc", "-std=gnu11", "-O2", *includes, "-o", str(partial)]
+    command += [str(resources.HARNESS_SOURCE), *pkg_config("--libs"), "-lelf"]
+    result = subprocess.run(command, capture_output=True, text=True, check=False)
+    if result.returncode != 0:
+        last = (result.stderr.strip().splitlines() or ["(no output)"])[-1]
+        raise HarnessBuildError(f"building the simavr harness failed: {last}")
+    partial.replace(path)
+    return path
 
 
 @dataclass(frozen=True)
@@ -108,10 +163,10 @@ class ParticleSim(ClosedOnExit):
         temperature sensor reads (default 300 mV); the firmware seeds its random numbers from it
         and the photocells, so particles of a swarm need different values."""
         elf = elf or default_elf()
-        harness = harness or default_harness()
-        for path in (elf, harness):
-            if not path.exists():
-                raise FileNotFoundError(f"{path} is missing: run `make firmware harness`")
+        if not elf.exists():
+            advice = "run `make firmware`" if resources.source_root() else "pass an ELF"
+            raise FileNotFoundError(f"{elf} is missing: {advice}")
+        harness = ensure_harness(harness)
         args = [str(harness)]
         self._eeprom_file: Path | None = None
         if eeprom is not None:

@@ -13,6 +13,7 @@ ROOT = REPO_ROOT
 PACKAGE = ROOT / "host" / "particlebot"
 PAGE = ROOT / "docs" / "architecture.md"
 
+
 def rules() -> tuple[set[str], dict[str, set[str] | None]]:
     """The foundations and, per package, what it may import (None: everything), from the page."""
     text = PAGE.read_text(encoding="utf-8")

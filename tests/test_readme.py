@@ -22,9 +22,7 @@ pytestmark = pytest.mark.e2e
 
 # A block is runnable when the line before its opening fence is this comment (invisible on the
 # site); it runs as a script of its own in an empty folder.
-RUNNABLE = re.compile(r"^<!-- runnable -->
-```python
-(.*?)^```", re.S | re.M)
+RUNNABLE = re.compile(r"^<!-- runnable -->\n```python\n(.*?)^```", re.S | re.M)
 
 
 def code_block(path: Path, language: str, section: str) -> str:

@@ -1,0 +1,49 @@
+"""Which backend a World runs on: "cpu", "cuda", or "auto" (CUDA when a real GPU is present)."""
+
+from __future__ import annotations
+
+import os
+from typing import Literal
+
+Device = Literal["cpu", "cuda", "auto"]
+DEVICES: tuple[str, ...] = ("auto", "cpu", "cuda")
+
+
+class DeviceError(ValueError):
+    """The device asked for cannot be had (one line: why)."""
+
+
+def simulated() -> bool:
+    """Whether numba-cuda runs its simulator (NUMBA_ENABLE_CUDASIM=1): kernels then run as Python
+    on the CPU, right but slow."""
+    return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
+
+
+def gpu_present() -> bool:
+    """Whether a real CUDA GPU can be used (never true in the simulator). Imports numba.cuda only
+    when asked: a machine without the CUDA driver answers False."""
+    if simulated():
+        return False
+    try:
+        from numba import cuda
+
+        return bool(cuda.is_available())
+    except Exception:  # noqa: BLE001 - a missing or broken driver means no GPU, whatever it raises
+        return False
+
+
+def resolve(device: str) -> Literal["cpu", "cuda"]:
+    """The backend for a request: "auto" takes CUDA only when a real GPU is present; "cuda"
+    takes it when a GPU or the simulator is there, else DeviceError."""
+    if device not in DEVICES:
+        raise DeviceError(f"device must be one of {', '.join(DEVICES)}, not {device!r}")
+    if device == "cpu":
+        return "cpu"
+    if device == "auto":
+        return "cuda" if gpu_present() else "cpu"
+    if simulated() or gpu_present():
+        return "cuda"
+    raise DeviceError(
+        "no CUDA GPU here (numba.cuda.is_available() is False); use --device cpu, or set "
+        "NUMBA_ENABLE_CUDASIM=1 to run the CUDA kernels in numba-cuda's simulator (slow)"
+    )

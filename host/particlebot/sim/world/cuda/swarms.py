@@ -31,12 +31,12 @@ def _blocks(count: int) -> tuple[int, int]:
 def grid_sides(prm: npt.NDArray[np.float64], count: int) -> tuple[int, int]:
     """A swarm's grid: the cells across the arena (`full`), and the side of the grid it keeps
     (`side`): the full grid when that is small, else a power of two of about sqrt(2 count)
-    cells a side onto which the arena wraps (cells far apart share a slot; the distance test
-    sorts them out). A 10,000-particle blob in the published 128 m arena thus has 256 x 256
-    cells, not 523 x 523."""
+    cells a side (4 at least) onto which the arena wraps (cells far apart share a slot; the
+    distance test sorts them out). A 10,000-particle blob in the published 128 m arena thus has
+    256 x 256 cells, not 523 x 523."""
     width = prm[k.P_LIST_RADIUS] - prm[k.P_SKIN]
     full = int(2.0 * prm[k.P_HALF_WIDTH] / width) + 1
-    wanted = max(4, 1 << max(2, math.ceil(math.log2(math.sqrt(2.0 * count + 16.0)))))
+    wanted = 1 << max(2, math.ceil(math.log2(math.sqrt(2.0 * count))))
     return full, min(full, wanted)
 
 

@@ -20,6 +20,7 @@ from particlebot.commands._common import fail
 from particlebot.commands._progress import ProgressBar
 from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds, OptionError, float_arg, int_arg
 from particlebot.options import parse_float as parse_number
+from particlebot.sim.world.cuda.device import DEVICES
 
 if TYPE_CHECKING:
     from particlebot.sim.runs.run import Run, Summary
@@ -80,6 +81,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--json", action="store_true", help="end with one JSON line of the run's figures"
+    )
+    parser.add_argument(
+        "--device",
+        choices=DEVICES,
+        default="auto",
+        help="where the world steps: the CPU, a CUDA GPU, or auto (the GPU when there is one; "
+        "default)",
     )
     parser.add_argument(
         "--threads",
@@ -188,6 +196,7 @@ def run(args: argparse.Namespace) -> int:
     from particlebot.sim.runs.run import Run, RunError, check_run_folder, default_folder
     from particlebot.sim.runs.video import VideoError
     from particlebot.sim.scenarios.scenario import ScenarioError
+    from particlebot.sim.world.cuda.device import DeviceError
 
     try:
         if args.threads is not None:
@@ -201,7 +210,9 @@ def run(args: argparse.Namespace) -> int:
             folder = Path(args.resume)
             check_run_folder(folder)
             print(f"resuming {folder} (compiling or loading the kernels)", file=sys.stderr)
-            session = Run.resume(folder, record_video=args.video, duration_s=args.duration)
+            session = Run.resume(
+                folder, record_video=args.video, duration_s=args.duration, device=args.device
+            )
         else:
             from particlebot.sim.scenarios.build import build_world
 
@@ -215,13 +226,13 @@ def run(args: argparse.Namespace) -> int:
                 "(compiling or loading the kernels)",
                 file=sys.stderr,
             )
-            built = build_world(scenario)
+            built = build_world(scenario, device=args.device)
             for note in built.notes:
                 print(f"note: {note}", file=sys.stderr)
             folder = Path(args.output) if args.output else default_folder(scenario.name)
             session = Run.start(built, folder, record_video=args.video)
         summary = _advance(session)
-    except (ScenarioError, RunError) as exc:
+    except (ScenarioError, RunError, DeviceError) as exc:
         return fail(f"simulate: {exc}")
     except VideoError as exc:
         return fail(f"simulate: {exc} (the run itself is complete in its folder)")

@@ -34,6 +34,7 @@ from particlebot.sim.scenarios.build import Built
 from particlebot.sim.scenarios.scenario import PlacementKind, Scenario
 from particlebot.sim.scenarios.toml_file import read_scenario
 from particlebot.sim.scenarios.write import to_published_cfg, to_toml
+from particlebot.sim.world.cuda.device import DeviceError
 from particlebot.sim.world.world import Snapshot, World
 
 SCENARIO_FILE = "scenario.toml"
@@ -198,14 +199,18 @@ class Run:
         record_video: bool = False,
         duration_s: float | None = None,
         pictures: bool = True,
+        device: str = "cpu",
     ) -> Run:
         """Continues a run from its latest snapshot; the CSV loses the rows written after it
         (the resumed run writes them again, the same). duration_s moves the run's end (later
-        or earlier, not before the snapshot), and the folder's scenario says so."""
+        or earlier, not before the snapshot), and the folder's scenario says so. device: where
+        the world steps on (World's)."""
         snapshot = check_run_folder(folder)
         scenario = read_scenario(folder / SCENARIO_FILE)
         try:
-            world = World.from_snapshot(Snapshot.load(snapshot))
+            world = World.from_snapshot(Snapshot.load(snapshot), device=device)
+        except DeviceError:
+            raise
         except (OSError, ValueError, KeyError, EOFError) as exc:
             raise RunError(f"{snapshot}: cannot be read ({exc})") from None
         try:

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import ctypes.util
 import os
 from typing import Literal
+
+from particlebot.errors import ParticlebotError
 
 Device = Literal["cpu", "cuda", "auto"]
 DEVICES: tuple[str, ...] = ("auto", "cpu", "cuda")
 
 
-class DeviceError(ValueError):
+class DeviceError(ParticlebotError, ValueError):
     """The device asked for cannot be had (one line: why)."""
 
 
@@ -20,15 +23,18 @@ def simulated() -> bool:
 
 
 def gpu_present() -> bool:
-    """Whether a real CUDA GPU can be used (never true in the simulator). Imports numba.cuda only
-    when asked: a machine without the CUDA driver answers False."""
+    """Whether a real CUDA GPU can be used (never true in the simulator)."""
     if simulated():
+        return False
+    # Without the driver's library there is no GPU: answered without importing numba.cuda
+    # (seconds, which every `simulate --device auto` would pay).
+    if ctypes.util.find_library("cuda") is None and ctypes.util.find_library("nvcuda") is None:
         return False
     try:
         from numba import cuda
 
         return bool(cuda.is_available())
-    except Exception:  # noqa: BLE001 - a missing or broken driver means no GPU, whatever it raises
+    except Exception:  # a missing or broken driver means no GPU, whatever it raises
         return False
 
 

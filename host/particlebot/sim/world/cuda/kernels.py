@@ -59,6 +59,18 @@ SCAN_TILE = 1024
 
 
 @laws.device
+def _thread() -> int:
+    """This thread's index in the launch (cuda.grid(1), typed: numba's stubs do not say)."""
+    return cuda.grid(1)  # type: ignore[call-arg]
+
+
+@laws.device
+def _atomic_add(array: Any, index: int, value: int) -> int:
+    """cuda.atomic.add, typed (numba's stubs do not say); the value array[index] had."""
+    return cuda.atomic.add(array, index, value)  # type: ignore[call-arg, return-value]
+
+
+@laws.device
 def cell_width(prm: Any) -> float:
     """A grid cell is as wide as the longest reach of a pair (2 r_max + magnet cutoff): every
     partner of a particle lies in the 3 x 3 cells around its own."""
@@ -73,7 +85,7 @@ def kinematics(
     """First pass (kernels._kinematics): joins take effect, the servo moves toward the commanded
     radius targets[row, base + ext[i]] (from last step's force sums, then cleared), positions
     advance by the old velocity and walls reflect it."""
-    i = cuda.grid(1)
+    i = _thread()
     if i >= n:
         return
     s = swarm[i]
@@ -125,7 +137,7 @@ def count_cells(
     cell_of: Any, counts: Any,
 ) -> None:  # fmt: skip
     """Each particle's cell, counted (the first pass of the counting sort)."""
-    i = cuda.grid(1)
+    i = _thread()
     if i >= n:
         return
     s = swarm[i]
@@ -136,13 +148,13 @@ def count_cells(
     cy = _axis_cell(pos[1, i], wall, width, full[s], side[s])
     c = cell_base[s] + cy * side[s] + cx
     cell_of[i] = c
-    cuda.atomic.add(counts, c, 1)
+    _atomic_add(counts, c, 1)
 
 
 @cuda.jit
 def scan_tiles(cells: int, counts: Any, start: Any, tile_sum: Any) -> None:
     """Prefix sums within tiles of SCAN_TILE cells (exclusive), and each tile's total."""
-    t = cuda.grid(1)
+    t = _thread()
     lo = t * SCAN_TILE
     if lo >= cells:
         return
@@ -157,7 +169,7 @@ def scan_tiles(cells: int, counts: Any, start: Any, tile_sum: Any) -> None:
 @cuda.jit
 def scan_totals(tiles: int, tile_sum: Any, cells: int, start: Any) -> None:
     """The tiles' offsets (one thread: a few thousand tiles), and the end of the last cell."""
-    if cuda.grid(1) != 0:
+    if _thread() != 0:
         return
     total = 0
     for t in range(tiles):
@@ -170,7 +182,7 @@ def scan_totals(tiles: int, tile_sum: Any, cells: int, start: Any) -> None:
 @cuda.jit
 def scan_add(cells: int, start: Any, tile_sum: Any, counts: Any) -> None:
     """Adds each tile's offset to its cells' starts and clears the counts for the scatter."""
-    c = cuda.grid(1)
+    c = _thread()
     if c >= cells:
         return
     start[c] += tile_sum[c // SCAN_TILE]
@@ -180,7 +192,7 @@ def scan_add(cells: int, start: Any, tile_sum: Any, counts: Any) -> None:
 @cuda.jit
 def clear(cells: int, counts: Any) -> None:
     """Zeroes the cells' counts."""
-    c = cuda.grid(1)
+    c = _thread()
     if c < cells:
         counts[c] = 0
 
@@ -188,18 +200,18 @@ def clear(cells: int, counts: Any) -> None:
 @cuda.jit
 def scatter(n: int, cell_of: Any, start: Any, fill: Any, members: Any) -> None:
     """Each particle into the next free place of its cell (in whatever order the atomics give)."""
-    i = cuda.grid(1)
+    i = _thread()
     if i >= n:
         return
     c = cell_of[i]
-    members[start[c] + cuda.atomic.add(fill, c, 1)] = i
+    members[start[c] + _atomic_add(fill, c, 1)] = i
 
 
 @cuda.jit
 def order_cells(cells: int, start: Any, members: Any) -> None:
     """Each cell's members in index order (an insertion sort of a handful): the pair sums then
     add in the same order every run, whatever order the scatter's atomics came in."""
-    c = cuda.grid(1)
+    c = _thread()
     if c >= cells:
         return
     lo = start[c]
@@ -221,7 +233,7 @@ def pairs(
     """Second pass, one thread per particle: what every particle within reach does to i, from
     the new positions and old velocities (contact: spring, dashpot, shear; else the magnets),
     summed in cell order; a free particle touching a member is marked to join."""
-    i = cuda.grid(1)
+    i = _thread()
     if i >= n:
         return
     s = swarm[i]
@@ -308,7 +320,7 @@ def settle(
     """Third pass (kernels._settle): obstacles and the swarm's passive objects act on i (what i
     does to its swarm's m-th object goes to pushes[i, m]), then its velocity with ground
     friction; the force rows are cleared for the next step."""
-    i = cuda.grid(1)
+    i = _thread()
     if i >= n:
         return
     s = swarm[i]
@@ -372,7 +384,7 @@ def settle(
 def objects_move(swarms: int, objects: Any, object_lo: Any, object_hi: Any, prm: Any) -> None:
     """Passive objects' positions from their velocities, reflected by the walls (one thread per
     swarm, kernels._objects_move)."""
-    s = cuda.grid(1)
+    s = _thread()
     if s >= swarms:
         return
     p = prm[s]
@@ -401,7 +413,7 @@ def objects_settle(
     """Passive objects' velocities (kernels._objects_settle), one thread per swarm: the pushes
     of its particles first..last summed in index order, each other, obstacles, friction. (A
     serial sum over the swarm: passive objects are rare, and the order stays fixed.)"""
-    s = cuda.grid(1)
+    s = _thread()
     if s >= swarms:
         return
     p = prm[s]

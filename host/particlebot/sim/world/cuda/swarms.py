@@ -164,8 +164,10 @@ class DeviceSwarms:
         tb = _blocks(self._tiles)
         sb = _blocks(self.swarms)
         for q in range(rows):
-            ck.kinematics[pb](n, q, self.d_targets, self.d_first, self.d_ext, self.d_swarm,
-                              self.d_pos, self.d_vel, self.d_body, self.d_flags, self.d_prm)  # fmt: skip
+            ck.kinematics[pb](
+                n, q, self.d_targets, self.d_first, self.d_ext, self.d_swarm, self.d_pos,
+                self.d_vel, self.d_body, self.d_flags, self.d_prm,
+            )  # fmt: skip
             if self._has_objects:
                 ck.objects_move[sb](self.swarms, self.d_objects, self.d_object_lo,
                                     self.d_object_hi, self.d_prm)  # fmt: skip

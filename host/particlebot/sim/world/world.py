@@ -12,7 +12,12 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.sim.particles.model.controller import BoolArray, Controller, FloatArray
+from particlebot.sim.particles.model.controller import (
+    BoolArray,
+    Controller,
+    CycleCommands,
+    FloatArray,
+)
 from particlebot.sim.world import kernels as k
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
@@ -171,6 +176,7 @@ class World:
             self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
         self._gpu: DeviceSwarms | None = None
+        self._cycle: CycleCommands | None = None  # the GPU's commands for this block, if any
         self._refresh_shadows()
         controller.bind(n, np.random.default_rng(controller_seed))
         self._place_on(device)
@@ -388,7 +394,7 @@ class World:
         while self._steps < end:
             rows = self._begin_block(end)
             if self._gpu is not None:
-                self._gpu.advance(rows, self._targets)
+                self._gpu.advance(rows, self._targets, (self._cycle,))
                 rebuilds = rows  # (the GPU bins the particles afresh at every step)
             elif self._stale:
                 rebuilds = k.advance_stale(
@@ -429,7 +435,12 @@ class World:
                 o.callback(self)
 
     def _command(self, block: int) -> int:
-        """Fills the targets buffer for up to `block` steps; returns how many rows it holds."""
+        """Fills the targets buffer for up to `block` steps; returns how many rows it holds. On
+        the GPU, a controller that can (cycle_ahead) leaves the commands to the GPU instead."""
+        if self._gpu is not None:
+            self._cycle = self.controller.cycle_ahead(self._view, self.params.dt, block)
+            if self._cycle is not None:
+                return min(self._cycle.rows, block)
         rows = min(block, self._targets.shape[0])
         done = self.controller.command_ahead(self._view, self.params.dt, self._targets[:rows])
         if done <= 0:
@@ -595,6 +606,7 @@ class World:
             world._stale_hashes = a["stale_hashes"].copy()
             k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)
         world._gpu = None
+        world._cycle = None
         world._place_on(device)
         return world
 

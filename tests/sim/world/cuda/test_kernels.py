@@ -128,3 +128,20 @@ def test_the_stale_grid_is_refused_on_the_gpu() -> None:
     params = PhysicsParams(neighbour_search=NeighbourSearch.PUBLISHED_STALE_GRID)
     with pytest.raises(DeviceError, match="stale grid"):
         World([0.0], [0.0], controller=Command(), params=params, device="cuda")
+
+
+def test_the_firmware_controller_commands_through_the_host_to_the_same_bits() -> None:
+    # The firmware controller has no GPU formula: its commands are uploaded step by step. Its
+    # first wave starts at 3 s: the CPU gets there, then both backends go on from there.
+    from particlebot.sim.particles.model.firmware import FirmwareController, FirmwareSettings
+
+    controller = FirmwareController(FirmwareSettings(start_s=0.0, update_interval_s=20))
+    x = [0.6, 0.6 + 2 * R_MIN + 0.5e-3]
+    start = World(x, [0.0, 0.0], controller=controller, lamp=Lamp(0.0, 0.0), seed=2)
+    start.step(295)
+    cpu = World.from_snapshot(start.snapshot(), device="cpu")
+    gpu = World.from_snapshot(start.snapshot(), device="cuda")  # (its own controller copy)
+    cpu.step(25)
+    gpu.step(25)
+    assert (gpu.radii() > R_MIN).any()  # it actuated
+    _same_bits(cpu, gpu)

@@ -62,8 +62,9 @@ class Ensemble:
         while self.worlds[0].steps < ends[0]:
             rows = min(w._begin_block(end) for w, end in zip(self.worlds, ends, strict=True))
             for s, w in enumerate(self.worlds):
-                self._targets[:rows, first[s] : first[s + 1]] = w._targets[:rows]
-            self._swarms.advance(rows, self._targets)
+                if w._cycle is None:
+                    self._targets[:rows, first[s] : first[s + 1]] = w._targets[:rows]
+            self._swarms.advance(rows, self._targets, [w._cycle for w in self.worlds])
             for w in self.worlds:
                 w._end_block(rows, rows)
 

@@ -45,6 +45,8 @@ _O_FRICTION = k.O_FRICTION
 _O_STATIC = k.O_STATIC
 _O_MAG = k.O_MAG
 _P_DT = k.P_DT
+_P_RMIN = k.P_RMIN
+_P_RMAX = k.P_RMAX
 _P_SPRING = k.P_SPRING
 _P_CUTOFF = k.P_CUTOFF
 _P_FRICTION = k.P_FRICTION
@@ -80,11 +82,13 @@ def cell_width(prm: Any) -> float:
 @cuda.jit
 def kinematics(
     n: int, row: int, targets: Any, base: Any, ext: Any, swarm: Any, pos: Any, vel: Any,
-    body: Any, flags: Any, prm: Any,
+    body: Any, flags: Any, prm: Any, cycles: Any, offset: Any,
 ) -> None:  # fmt: skip
     """First pass (kernels._kinematics): joins take effect, the servo moves toward the commanded
-    radius targets[row, base + ext[i]] (from last step's force sums, then cleared), positions
-    advance by the old velocity and walls reflect it."""
+    radius (from last step's force sums, then cleared), positions advance by the old velocity
+    and walls reflect it. The command: for a swarm whose cycles[s, 0] is 1, the published cycle
+    at step cycles[s, 1] + row (period cycles[s, 2], rise cycles[s, 3], particle offsets
+    offset[base + ext[i]]); else targets[row, base + ext[i]]."""
     i = _thread()
     if i >= n:
         return
@@ -98,7 +102,13 @@ def kinematics(
         flags[_F_ACTING, i] = flags[_F_ALIVE, i] & (1 - flags[_F_HELD, i])
     r = body[_B_R, i]
     if flags[_F_ACTING, i]:
-        target = targets[row, base[s] + ext[i]]
+        if cycles[s, 0] != 0.0:
+            r_min = p[_P_RMIN]
+            clock = ((cycles[s, 1] + row) * dt) % cycles[s, 2]
+            target = laws.cycle_radius(clock, offset[base[s] + ext[i]], cycles[s, 2],
+                                       cycles[s, 3], r_min, p[_P_RMAX] - r_min)  # fmt: skip
+        else:
+            target = targets[row, base[s] + ext[i]]
         if not math.isnan(target):
             r = laws.servo(r, target, body[_B_FR, i], body[_B_FA, i], p)
             body[_B_R, i] = r

@@ -79,6 +79,22 @@ def contact(
 
 
 @device
+def cycle_radius(
+    clock: float, offset: float, cycle: float, rise: float, r_min: float, stroke: float
+) -> float:
+    """The published cycle's commanded radius at a clock in [0, cycle) for a phase offset in
+    [0, cycle): rising, falling, or NaN (rest: hold) (published._radius_at)."""
+    tau = clock + offset
+    if tau >= cycle:
+        tau -= cycle
+    if tau < rise:
+        return r_min + stroke * tau / rise
+    if tau < 2.0 * rise:
+        return r_min + stroke * (2.0 - tau / rise)
+    return math.nan
+
+
+@device
 def servo(r: float, target: float, fr: float, fa: float, prm: Any) -> float:
     """The published servo with its stall limit: the new radius for a commanded one."""
     r_min = prm[_P_RMIN]

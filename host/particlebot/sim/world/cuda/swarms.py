@@ -17,6 +17,7 @@ from particlebot.sim.world.cuda import kernels as ck
 from particlebot.sim.world.cuda.device import simulated
 
 if TYPE_CHECKING:
+    from particlebot.sim.particles.model.controller import CycleCommands
     from particlebot.sim.world.world import World
 
 THREADS = 128
@@ -103,6 +104,9 @@ class DeviceSwarms:
         self._tiles = math.ceil(self.cells / ck.SCAN_TILE)
         self.d_tile_sum = cuda.device_array(self._tiles, dtype=np.int64)
         self.d_targets = cuda.device_array((1, self.count))
+        self._offsets = np.zeros(self.count)  # the cycles' phase offsets, caller order
+        self.d_offset = cuda.to_device(self._offsets)
+        self.d_cycles = cuda.to_device(np.zeros((s_count, 4)))
         self._stale = [False] * s_count  # whether a World's host arrays are behind the device
         self.dirty = [False] * s_count  # whether a World's host arrays are ahead of the device
         for s in range(s_count):
@@ -148,16 +152,33 @@ class DeviceSwarms:
 
     # ---- stepping ------------------------------------------------------------------------------
 
-    def advance(self, rows: int, targets: npt.NDArray[np.float64]) -> None:
+    def advance(
+        self,
+        rows: int,
+        targets: npt.NDArray[np.float64],
+        cycles: Sequence[CycleCommands | None] = (),
+    ) -> None:
         """Runs `rows` steps of every swarm; step q commands targets[q, first[s] + ext] (NaN:
-        hold), the swarms' caller-order rows side by side. Worlds whose host state changed
+        hold), the swarms' caller-order rows side by side, except for a swarm whose entry of
+        `cycles` says the GPU computes its commands itself (then its columns of targets are not
+        read, and none are uploaded when every swarm has one). Worlds whose host state changed
         since (dead chosen, shadows, a particle put down) are copied up first."""
         for s in range(self.swarms):
             if self.dirty[s]:
                 self.push(s)
-        if self.d_targets.shape[0] < rows:
-            self.d_targets = cuda.device_array((rows, self.count))
-        self.d_targets[:rows] = np.ascontiguousarray(targets[:rows])
+        table = np.zeros((self.swarms, 4))
+        offsets = self._offsets
+        for s, plan in enumerate(cycles):
+            if plan is not None:
+                table[s] = (1.0, float(plan.first), plan.cycle_s, plan.rise_s)
+                offsets[self.first[s] : self.first[s + 1]] = plan.offset
+        self.d_cycles = cuda.to_device(table)
+        if table[:, 0].any():
+            self.d_offset.copy_to_device(offsets)
+        if not table[:, 0].all():
+            if self.d_targets.shape[0] < rows:
+                self.d_targets = cuda.device_array((rows, self.count))
+            self.d_targets[:rows] = np.ascontiguousarray(targets[:rows])
         n = self.count
         pb = _blocks(n)
         cb = _blocks(self.cells)
@@ -166,7 +187,7 @@ class DeviceSwarms:
         for q in range(rows):
             ck.kinematics[pb](
                 n, q, self.d_targets, self.d_first, self.d_ext, self.d_swarm, self.d_pos,
-                self.d_vel, self.d_body, self.d_flags, self.d_prm,
+                self.d_vel, self.d_body, self.d_flags, self.d_prm, self.d_cycles, self.d_offset,
             )  # fmt: skip
             if self._has_objects:
                 ck.objects_move[sb](self.swarms, self.d_objects, self.d_object_lo,

@@ -56,8 +56,9 @@ _P_SKIN = k.P_SKIN
 _P_LIST_RADIUS = k.P_LIST_RADIUS
 _P_TOUCH_GAP = k.P_TOUCH_GAP
 
-SCAN_TILE = 1024
-"""Cells one thread scans in the first level of the grid's prefix sum."""
+SCAN_TILE = 64
+"""Values one thread sums at each level of the grid's prefix sum (levels until one tile is
+left: 11 million cells take four)."""
 
 
 @laws.device
@@ -162,41 +163,34 @@ def count_cells(
 
 
 @cuda.jit
-def scan_tiles(cells: int, counts: Any, start: Any, tile_sum: Any) -> None:
-    """Prefix sums within tiles of SCAN_TILE cells (exclusive), and each tile's total."""
+def scan_tiles(count: int, values: Any, out: Any, sums: Any) -> None:
+    """One level of the grid's prefix sum: exclusive sums within tiles of SCAN_TILE values, and
+    each tile's total (which the next level sums the same way)."""
     t = _thread()
     lo = t * SCAN_TILE
-    if lo >= cells:
+    if lo >= count:
         return
-    hi = min(lo + SCAN_TILE, cells)
+    hi = min(lo + SCAN_TILE, count)
     total = 0
     for c in range(lo, hi):
-        start[c] = total
-        total += counts[c]
-    tile_sum[t] = total
+        out[c] = total
+        total += values[c]
+    sums[t] = total
 
 
 @cuda.jit
-def scan_totals(tiles: int, tile_sum: Any, cells: int, start: Any) -> None:
-    """The tiles' offsets (one thread: a few thousand tiles), and the end of the last cell."""
-    if _thread() != 0:
-        return
-    total = 0
-    for t in range(tiles):
-        here = tile_sum[t]
-        tile_sum[t] = total
-        total += here
-    start[cells] = total
-
-
-@cuda.jit
-def scan_add(cells: int, start: Any, tile_sum: Any, counts: Any) -> None:
-    """Adds each tile's offset to its cells' starts and clears the counts for the scatter."""
+def add_offsets(count: int, out: Any, offsets: Any) -> None:
+    """Adds each tile's offset (the next level's exclusive sum) to its values."""
     c = _thread()
-    if c >= cells:
-        return
-    start[c] += tile_sum[c // SCAN_TILE]
-    counts[c] = 0
+    if c < count:
+        out[c] += offsets[c // SCAN_TILE]
+
+
+@cuda.jit
+def set_end(start: Any, cells: int, top: Any) -> None:
+    """The end of the last cell: every particle (the last level's single total)."""
+    if _thread() == 0:
+        start[cells] = top[0]
 
 
 @cuda.jit

@@ -41,6 +41,34 @@ def grid_sides(prm: npt.NDArray[np.float64], count: int) -> tuple[int, int]:
     return full, min(full, wanted)
 
 
+class PrefixSum:
+    """An exclusive prefix sum of `count` integers on the device, into count + 1 (the last: the
+    total), level by level: each level sums tiles of SCAN_TILE values and hands their totals to
+    the next, until one tile is left; then each level's offsets are added back down."""
+
+    def __init__(self, count: int) -> None:
+        self.count = count
+        self.levels = [count]
+        while self.levels[-1] > 1:
+            self.levels.append(math.ceil(self.levels[-1] / ck.SCAN_TILE))
+        if len(self.levels) == 1:
+            self.levels.append(1)
+        self.sums = [cuda.device_array(size, dtype=np.int64) for size in self.levels[1:]]
+        self.scanned = [cuda.device_array(size, dtype=np.int64) for size in self.levels[1:]]
+
+    def __call__(self, values: Any, out: Any) -> None:
+        levels = self.levels
+        source, target = values, out
+        for k in range(len(levels) - 1):
+            ck.scan_tiles[_blocks(levels[k + 1])](levels[k], source, target, self.sums[k])
+            source, target = self.sums[k], self.scanned[k]
+        for k in range(len(levels) - 3, 0, -1):
+            ck.add_offsets[_blocks(levels[k])](levels[k], self.scanned[k - 1], self.scanned[k])
+        if len(levels) > 2:
+            ck.add_offsets[_blocks(levels[0])](levels[0], out, self.scanned[0])
+        ck.set_end[1, 1](out, self.count, self.sums[-1])
+
+
 class DeviceSwarms:
     """One or more Worlds' state on the GPU, stepped together (an ensemble of independent swarms:
     they share launches, not physics). Particles keep each World's internal order."""
@@ -101,8 +129,7 @@ class DeviceSwarms:
         self.d_members = cuda.device_array(self.count, dtype=np.int64)
         self.d_counts = cuda.to_device(np.zeros(self.cells, dtype=np.int32))
         self.d_start = cuda.device_array(self.cells + 1, dtype=np.int64)
-        self._tiles = math.ceil(self.cells / ck.SCAN_TILE)
-        self.d_tile_sum = cuda.device_array(self._tiles, dtype=np.int64)
+        self._scan = PrefixSum(self.cells)
         self.d_targets = cuda.device_array((1, self.count))
         self._offsets = np.zeros(self.count)  # the cycles' phase offsets, caller order
         self.d_offset = cuda.to_device(self._offsets)
@@ -182,7 +209,6 @@ class DeviceSwarms:
         n = self.count
         pb = _blocks(n)
         cb = _blocks(self.cells)
-        tb = _blocks(self._tiles)
         sb = _blocks(self.swarms)
         for q in range(rows):
             ck.kinematics[pb](
@@ -192,11 +218,11 @@ class DeviceSwarms:
             if self._has_objects:
                 ck.objects_move[sb](self.swarms, self.d_objects, self.d_object_lo,
                                     self.d_object_hi, self.d_prm)  # fmt: skip
+            ck.clear[cb](self.cells, self.d_counts)
             ck.count_cells[pb](n, self.d_pos, self.d_swarm, self.d_prm, self.d_side, self.d_full,
                                self.d_cell_base, self.d_cell_of, self.d_counts)  # fmt: skip
-            ck.scan_tiles[tb](self.cells, self.d_counts, self.d_start, self.d_tile_sum)
-            ck.scan_totals[1, 1](self._tiles, self.d_tile_sum, self.cells, self.d_start)
-            ck.scan_add[cb](self.cells, self.d_start, self.d_tile_sum, self.d_counts)
+            self._scan(self.d_counts, self.d_start)
+            ck.clear[cb](self.cells, self.d_counts)  # (the scatter counts into them again)
             ck.scatter[pb](n, self.d_cell_of, self.d_start, self.d_counts, self.d_members)
             ck.order_cells[cb](self.cells, self.d_start, self.d_members)
             ck.pairs[pb](n, self.d_pos, self.d_vel, self.d_body, self.d_flags, self.d_swarm,
@@ -212,6 +238,4 @@ class DeviceSwarms:
                                       self.d_pushes, self.d_force, self.d_rects, self.d_rect_lo,
                                       self.d_rect_hi, self.d_circles, self.d_circle_lo,
                                       self.d_circle_hi, self.d_prm)  # fmt: skip
-            # The next step's count needs the cells' counts cleared (the scatter used them).
-            ck.clear[cb](self.cells, self.d_counts)
         self._stale = [True] * self.swarms

@@ -59,11 +59,14 @@ class PrefixSum:
     def __call__(self, values: Any, out: Any) -> None:
         levels = self.levels
         source, target = values, out
-        for k in range(len(levels) - 1):
-            ck.scan_tiles[_blocks(levels[k + 1])](levels[k], source, target, self.sums[k])
-            source, target = self.sums[k], self.scanned[k]
-        for k in range(len(levels) - 3, 0, -1):
-            ck.add_offsets[_blocks(levels[k])](levels[k], self.scanned[k - 1], self.scanned[k])
+        for level in range(len(levels) - 1):
+            tiles = _blocks(levels[level + 1])
+            ck.scan_tiles[tiles](levels[level], source, target, self.sums[level])
+            source, target = self.sums[level], self.scanned[level]
+        for level in range(len(levels) - 3, 0, -1):
+            ck.add_offsets[_blocks(levels[level])](
+                levels[level], self.scanned[level - 1], self.scanned[level]
+            )
         if len(levels) > 2:
             ck.add_offsets[_blocks(levels[0])](levels[0], out, self.scanned[0])
         ck.set_end[1, 1](out, self.count, self.sums[-1])

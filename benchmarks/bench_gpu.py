@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -24,15 +23,12 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-if "--smoke" in sys.argv and "NUMBA_ENABLE_CUDASIM" not in os.environ:
-    # The smoke run needs no GPU: numba-cuda's simulator (set before numba.cuda is imported).
-    from particlebot.sim.world.cuda.device import gpu_present
+if "--smoke" in sys.argv:
+    # The smoke run needs no GPU: numba-cuda's simulator, unless there is a GPU.
+    from particlebot.sim.world.cuda.device import gpu_present, use_simulator
 
     if not gpu_present():
-        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
-        from numba.core import config
-
-        config.reload_config()  # (numba read its environment when it was imported)
+        use_simulator()
 
 import numpy as np
 from numba import cuda

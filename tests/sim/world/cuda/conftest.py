@@ -1,18 +1,13 @@
 """The CUDA backend's tests run in numba-cuda's simulator: switched on here, before anything
-imports numba.cuda (numba reads NUMBA_ENABLE_CUDASIM into its config, hence the reload)."""
+imports numba.cuda."""
 
 from __future__ import annotations
 
-import os
-import sys
-
 import pytest
 
-if "numba.cuda" not in sys.modules:
-    os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
-    from numba.core import config
+from particlebot.sim.world.cuda.device import use_simulator
 
-    config.reload_config()
+use_simulator()
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

@@ -22,6 +22,20 @@ def simulated() -> bool:
     return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
 
 
+def use_simulator() -> bool:
+    """Switches numba-cuda to its simulator, for tests and smoke runs without a GPU; only
+    possible before anything imports numba.cuda (numba read its environment at import, hence
+    the reload). Returns whether the simulator is on."""
+    import sys
+
+    if "numba.cuda" not in sys.modules:
+        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+        from numba.core import config
+
+        config.reload_config()
+    return simulated()
+
+
 def gpu_present() -> bool:
     """Whether a real CUDA GPU can be used (never true in the simulator)."""
     if simulated():

@@ -11,6 +11,7 @@ kernels on the CPU (slowly), which is how the tests check them.
     kernels.py   the passes of a step, one thread per particle (or cell, swarm)
     swarms.py    the swarms' concatenated state on the device, the step loop, the copies
     ensemble.py  many Worlds stepped side by side
+    ptx.py       compiles every kernel to PTX without a GPU (a check of the real target)
 
 What runs on the GPU, every step: the published controller's commands (its cycle, from the
 phase offsets the host sets at each phase update), the servo with its stall limit, motion and
@@ -40,9 +41,10 @@ Where the GPU's result may differ from the CPU's:
     A particle with at most one partner gets the same bits; with more, the sums may differ in
     the last bit. Passive objects: the CPU sums the particles' pushes chunk by chunk (16 chunks
     from 2,048 particles up), the GPU in index order (the CPU's order below 2,048 particles).
-  * Fused multiply-add. NVVM contracts a * b + c into one rounding by default, so on a real GPU
-    even a lone pair may differ from the CPU in the last bits (numba-cuda's simulator, plain
-    Python floats, does not contract: there the tests find the same bits).
+  * Fused multiply-add. NVVM contracts a * b + c into one rounding by default (the pair
+    kernel's PTX for sm_90 has 8 fma.rn.f64), so on a real GPU even a lone pair may differ from
+    the CPU in the last bits (numba-cuda's simulator, plain Python floats, does not contract:
+    there the tests find the same bits).
   * float32: `precision="float32"` keeps velocities and force sums in float32 on both backends
     alike (positions stay float64); the GPU adds nothing of its own.
   * Atomics only place particles in cells; the per-cell sort erases the order they came in, so

@@ -58,7 +58,7 @@ def main() -> int:
 
     from particlebot.sim.world.cuda import kernels as ck
 
-    dispatcher.get_current_device = _Hopper  # type: ignore[assignment]  # no driver needed
+    dispatcher.get_current_device = _Hopper  # no driver needed
 
     for ftype in (np.float64, np.float32):
         for name, signature in signatures(ftype).items():

@@ -5,7 +5,7 @@ on the host: between dumps and controller updates the state stays on the device)
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -27,6 +27,16 @@ THREADS = 128
 def _blocks(count: int) -> tuple[int, int]:
     threads = 32 if simulated() else THREADS
     return max(1, math.ceil(count / threads)), threads
+
+
+def _launcher(kernel: Any, count: int) -> Callable[..., None]:
+    """The kernel configured once for `count` threads (configuring a launch costs host time
+    that a large step hides and a small one does not). The simulator configures the kernel
+    object itself rather than a copy, so there it is configured at every launch."""
+    config = _blocks(count)
+    if simulated():
+        return lambda *args: kernel[config](*args)
+    return kernel[config]
 
 
 def grid_sides(prm: npt.NDArray[np.float64], count: int) -> tuple[int, int]:
@@ -55,21 +65,21 @@ class PrefixSum:
             self.levels.append(1)
         self.sums = [cuda.device_array(size, dtype=np.int64) for size in self.levels[1:]]
         self.scanned = [cuda.device_array(size, dtype=np.int64) for size in self.levels[1:]]
+        self._tiles = [_launcher(ck.scan_tiles, size) for size in self.levels[1:]]
+        self._adds = [_launcher(ck.add_offsets, size) for size in self.levels]
+        self._end = _launcher(ck.set_end, 1)
 
     def __call__(self, values: Any, out: Any) -> None:
         levels = self.levels
         source, target = values, out
         for level in range(len(levels) - 1):
-            tiles = _blocks(levels[level + 1])
-            ck.scan_tiles[tiles](levels[level], source, target, self.sums[level])
+            self._tiles[level](levels[level], source, target, self.sums[level])
             source, target = self.sums[level], self.scanned[level]
         for level in range(len(levels) - 3, 0, -1):
-            ck.add_offsets[_blocks(levels[level])](
-                levels[level], self.scanned[level - 1], self.scanned[level]
-            )
+            self._adds[level](levels[level], self.scanned[level - 1], self.scanned[level])
         if len(levels) > 2:
-            ck.add_offsets[_blocks(levels[0])](levels[0], out, self.scanned[0])
-        ck.set_end[1, 1](out, self.count, self.sums[-1])
+            self._adds[0](levels[0], out, self.scanned[0])
+        self._end(out, self.count, self.sums[-1])
 
 
 class DeviceSwarms:
@@ -133,6 +143,16 @@ class DeviceSwarms:
         self.d_counts = cuda.to_device(np.zeros(self.cells, dtype=np.int32))
         self.d_start = cuda.device_array(self.cells + 1, dtype=np.int64)
         self._scan = PrefixSum(self.cells)
+        # The launches, configured once.
+        self._kinematics = _launcher(ck.kinematics, self.count)
+        self._objects_move = _launcher(ck.objects_move, self.swarms)
+        self._clear = _launcher(ck.clear, self.cells)
+        self._count_cells = _launcher(ck.count_cells, self.count)
+        self._scatter = _launcher(ck.scatter, self.count)
+        self._order_cells = _launcher(ck.order_cells, self.cells)
+        self._pairs = _launcher(ck.pairs, self.count)
+        self._settle = _launcher(ck.settle, self.count)
+        self._objects_settle = _launcher(ck.objects_settle, self.swarms)
         self.d_targets = cuda.device_array((1, self.count))
         self._offsets = np.zeros(self.count)  # the cycles' phase offsets, caller order
         self.d_offset = cuda.to_device(self._offsets)
@@ -210,33 +230,30 @@ class DeviceSwarms:
                 self.d_targets = cuda.device_array((rows, self.count))
             self.d_targets[:rows] = np.ascontiguousarray(targets[:rows])
         n = self.count
-        pb = _blocks(n)
-        cb = _blocks(self.cells)
-        sb = _blocks(self.swarms)
         for q in range(rows):
-            ck.kinematics[pb](
+            self._kinematics(
                 n, q, self.d_targets, self.d_first, self.d_ext, self.d_swarm, self.d_pos,
                 self.d_vel, self.d_body, self.d_flags, self.d_prm, self.d_cycles, self.d_offset,
             )  # fmt: skip
             if self._has_objects:
-                ck.objects_move[sb](self.swarms, self.d_objects, self.d_object_lo,
+                self._objects_move(self.swarms, self.d_objects, self.d_object_lo,
                                     self.d_object_hi, self.d_prm)  # fmt: skip
-            ck.clear[cb](self.cells, self.d_counts)
-            ck.count_cells[pb](n, self.d_pos, self.d_swarm, self.d_prm, self.d_side, self.d_full,
+            self._clear(self.cells, self.d_counts)
+            self._count_cells(n, self.d_pos, self.d_swarm, self.d_prm, self.d_side, self.d_full,
                                self.d_cell_base, self.d_cell_of, self.d_counts)  # fmt: skip
             self._scan(self.d_counts, self.d_start)
-            ck.clear[cb](self.cells, self.d_counts)  # (the scatter counts into them again)
-            ck.scatter[pb](n, self.d_cell_of, self.d_start, self.d_counts, self.d_members)
-            ck.order_cells[cb](self.cells, self.d_start, self.d_members)
-            ck.pairs[pb](n, self.d_pos, self.d_vel, self.d_body, self.d_flags, self.d_swarm,
+            self._clear(self.cells, self.d_counts)  # (the scatter counts into them again)
+            self._scatter(n, self.d_cell_of, self.d_start, self.d_counts, self.d_members)
+            self._order_cells(self.cells, self.d_start, self.d_members)
+            self._pairs(n, self.d_pos, self.d_vel, self.d_body, self.d_flags, self.d_swarm,
                          self.d_prm, self.d_side, self.d_full, self.d_cell_base, self.d_cell_of,
                          self.d_start, self.d_members)  # fmt: skip
-            ck.settle[pb](n, self.d_pos, self.d_vel, self.d_body, self.d_swarm, self.d_prm,
+            self._settle(n, self.d_pos, self.d_vel, self.d_body, self.d_swarm, self.d_prm,
                           self.d_rects, self.d_rect_lo, self.d_rect_hi, self.d_circles,
                           self.d_circle_lo, self.d_circle_hi, self.d_objects, self.d_object_lo,
                           self.d_object_hi, self.d_pushes)  # fmt: skip
             if self._has_objects:
-                ck.objects_settle[sb](self.swarms, self.d_objects, self.d_object_lo,
+                self._objects_settle(self.swarms, self.d_objects, self.d_object_lo,
                                       self.d_object_hi, self.d_first, self.d_last,
                                       self.d_pushes, self.d_force, self.d_rects, self.d_rect_lo,
                                       self.d_rect_hi, self.d_circles, self.d_circle_lo,

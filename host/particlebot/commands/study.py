@@ -169,7 +169,9 @@ def _study(
     default = f"results/{study.name}" + ("-quick" if options.quick else "")
     store = ResultStore(Path(args.results or default))
     try:
-        device = resolve_device(args.device)
+        # With a scheduler the workers' GPUs count, not this machine's: they check their own.
+        remote_gpu = args.scheduler is not None and args.device == "cuda"
+        device = "cuda" if remote_gpu else resolve_device(args.device)
     except DeviceError as exc:
         return fail(f"study {study.name}: {exc}")
     if runner is None:

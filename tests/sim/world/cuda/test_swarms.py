@@ -26,5 +26,5 @@ def test_a_small_swarm_wraps_a_large_arena_onto_a_small_grid() -> None:
     full, side = grid_sides(world._prm, 10_000)
     reach = 2 * PhysicsParams().r_max + PhysicsParams().magnet_cutoff
     assert full == int(2 * PhysicsParams().half_width / reach) + 1  # 523: the whole arena
-    assert side == 256  # a power of two near sqrt(2 x 10,000)
+    assert side == 128  # a power of two near sqrt(10,000)
     assert grid_sides(world._prm, 1) == (full, 4)

@@ -41,13 +41,14 @@ def _launcher(kernel: Any, count: int) -> Callable[..., None]:
 
 def grid_sides(prm: npt.NDArray[np.float64], count: int) -> tuple[int, int]:
     """A swarm's grid: the cells across the arena (`full`), and the side of the grid it keeps
-    (`side`): the full grid when that is small, else a power of two of about sqrt(2 count)
+    (`side`): the full grid when that is small, else a power of two of about sqrt(count)
     cells a side (4 at least) onto which the arena wraps (cells far apart share a slot; the
-    distance test sorts them out). A 10,000-particle blob in the published 128 m arena thus has
-    256 x 256 cells, not 523 x 523."""
+    distance test sorts them out). A packed blob spans about 0.65 sqrt(count) cells, so it
+    does not meet itself; a 10,000-particle one in the published 128 m arena has 128 x 128
+    cells, not 523 x 523 (1.6 cells a particle: the per-cell passes stay small)."""
     width = prm[k.P_LIST_RADIUS] - prm[k.P_SKIN]
     full = int(2.0 * prm[k.P_HALF_WIDTH] / width) + 1
-    wanted = 1 << max(2, math.ceil(math.log2(math.sqrt(2.0 * count))))
+    wanted = 1 << max(2, math.ceil(math.log2(math.sqrt(count))))
     return full, min(full, wanted)
 
 

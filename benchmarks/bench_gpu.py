@@ -7,8 +7,9 @@ GPU memory, and Table S3's 10,000-particle row (99 runs) as one ensemble.
 
 Everything printed also goes to benchmarks/results/gpu-<GPU>-<UTC time>.txt, and the figures as
 JSON beside it. --cap-s bounds the whole run: each measurement gets its share, the largest sizes
-step only as long as their share allows, and Table S3's row is timed over as many steps as fit
-and extrapolated to its 720,000 (labelled so in the output).
+step only as long as their share allows (and are skipped past 60 % of the cap), and Table S3's
+row is built as far as the cap allows (scaled down, and labelled so, when not all 99 runs fit),
+timed over as many steps as fit and extrapolated to its 720,000 (labelled so in the output).
 """
 
 from __future__ import annotations
@@ -104,8 +105,9 @@ class Report:
         self.lines.append(line)
 
 
-def speeds(report: Report, sizes: tuple[int, ...], share_s: float) -> None:
-    """Particle-steps/s by size and regime on the GPU, and on the CPU for the smaller sizes."""
+def speeds(report: Report, sizes: tuple[int, ...], share_s: float, until: float) -> None:
+    """Particle-steps/s by size and regime on the GPU (each timed for share_s), and on the CPU
+    for the smaller sizes (half that); sizes not begun by `until` (perf_counter) are skipped."""
     sync = cuda.synchronize
     report.say("particles | regime | GPU particle-steps/s | x real time | CPU particle-steps/s "
                "| GPU memory in use (MB)")  # fmt: skip
@@ -113,15 +115,19 @@ def speeds(report: Report, sizes: tuple[int, ...], share_s: float) -> None:
     peak = 0
     for count in sizes:
         for regime, shear in SHEARS.items():
+            if time.perf_counter() > until:
+                report.say(f"{count:,} | {regime} | skipped: the time cap")
+                continue
             try:
                 built = time.perf_counter()
                 world = blob_world(count, shear, "cuda")
                 build_s = time.perf_counter() - built
                 used = gpu_used_bytes() - baseline
-                peak = max(peak, used)
                 world.step(WARM_STEPS)
                 sync()
                 steps, wall = timed(world, share_s, sync)
+                used = max(used, gpu_used_bytes() - baseline)
+                peak = max(peak, used)
             except Exception as exc:  # out of memory, a launch failure: say so and go on
                 report.say(f"{count:,} | {regime} | failed: {type(exc).__name__}: {exc}")
                 continue
@@ -147,10 +153,12 @@ def speeds(report: Report, sizes: tuple[int, ...], share_s: float) -> None:
     report.say(f"peak GPU memory in use by these worlds: {peak / 1e6:.0f} MB")
 
 
-def table_s3_row(report: Report, runs: int, particles: int, share_s: float) -> None:
-    """Table S3's 10,000-particle row (99 runs at 0-80 % dead, 7,200 s each) as one ensemble:
-    built as `particlebot study dead --device cuda` builds it, timed for share_s, the whole
-    720,000 steps extrapolated from the rate (the line says so)."""
+def table_s3_row(report: Report, runs: int, particles: int, build_s: float, share_s: float) -> None:
+    """Table S3's 10,000-particle row (99 runs at 0-80 % dead, 7,200 s each) as one ensemble,
+    built as `particlebot study dead --device cuda` builds it. Runs are built (on the CPU) until
+    build_s is spent: with fewer than all, the row is SCALED DOWN and its wall time extrapolated
+    by particles; the ensemble is timed for share_s and the 720,000 steps extrapolated from the
+    rate. The line says which figures are measured and which extrapolated."""
     import tempfile
 
     from particlebot.sim.world.cuda.ensemble import Ensemble
@@ -161,34 +169,42 @@ def table_s3_row(report: Report, runs: int, particles: int, share_s: float) -> N
     options = resolve(study, RawOptions(sizes=str(particles)))
     specs = study.specs(options)[:runs]
     with tempfile.TemporaryDirectory(prefix="bench-gpu-") as scratch:
-        built = time.perf_counter()
-        opened = [seam.open_run(s.setup, Path(scratch) / s.run_id, False)[1] for s in specs]
+        began = time.perf_counter()
+        opened = []
+        for spec in specs:
+            opened.append(seam.open_run(spec.setup, Path(scratch) / spec.run_id, False)[1])
+            if time.perf_counter() - began > build_s:
+                break
         ensemble = Ensemble([run.world for run in opened])
-        build_s = time.perf_counter() - built
+        built_s = time.perf_counter() - began
         ensemble.step(WARM_STEPS)
         cuda.synchronize()
         steps = 0
-        chunk = 50
-        began = time.perf_counter()
-        while time.perf_counter() - began < share_s:
+        chunk = 10
+        timing = time.perf_counter()
+        while time.perf_counter() - timing < share_s:
             ensemble.step(chunk)
             cuda.synchronize()
             steps += chunk
-        wall = time.perf_counter() - began
-    total = opened[0].total_steps if opened else TABLE_S3_STEPS
-    per_step = wall / max(steps, 1)
-    estimate = build_s + per_step * total
-    rate = sum(run.world.count for run in opened) * steps / wall
+            chunk = min(chunk * 2, 500)
+        wall = time.perf_counter() - timing
+    total = opened[0].total_steps
+    scale = len(specs) / len(opened)
+    per_step = wall / steps * scale
+    estimate = built_s * scale + per_step * total
+    rate = ensemble.count * steps / wall
+    scaled = "" if scale == 1.0 else f" SCALED DOWN: {len(opened)} of {len(specs)} runs built;"
     report.say(
-        f"Table S3, {particles:,}-particle row: {len(opened)} runs in one ensemble, "
-        f"{ensemble.count:,} particles; built in {build_s:.1f} s; {steps} steps timed in "
-        f"{wall:.1f} s ({rate:.3g} particle-steps/s); EXTRAPOLATED to {total:,} steps: "
-        f"{estimate / 60:.1f} min wall"
+        f"Table S3, {particles:,}-particle row as one ensemble:{scaled} {len(opened)} runs, "
+        f"{ensemble.count:,} particles, built in {built_s:.1f} s; {steps} steps timed in "
+        f"{wall:.1f} s ({rate:.3g} particle-steps/s); EXTRAPOLATED to all {len(specs)} runs "
+        f"x {total:,} steps: {estimate / 60:.1f} min wall"
     )
     report.figures["table_s3"] = {
-        "runs": len(opened), "particles_each": particles, "build_s": build_s,
-        "timed_steps": steps, "timed_wall_s": wall, "steps_per_run": total,
-        "extrapolated_wall_s": estimate, "particle_steps_per_s": rate,
+        "runs": len(opened), "runs_in_row": len(specs), "particles_each": particles,
+        "build_s": built_s, "timed_steps": steps, "timed_wall_s": wall,
+        "steps_per_run": total, "extrapolated_wall_s": estimate,
+        "particle_steps_per_s": rate,
     }  # fmt: skip
 
 
@@ -221,12 +237,16 @@ def main() -> int:
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
     report.figures.update({"gpu": name, "utc": stamp, "smoke": args.smoke})
     report.say(f"bench_gpu on {name}, {stamp}{' (smoke: tiny sizes)' if args.smoke else ''}")
-    # Shares of the cap: each GPU measurement, half that again for the CPU beside the smaller
-    # ones, and a quarter of the cap for Table S3's row; building takes the rest.
-    measurements = len(sizes) * len(SHEARS)
-    share = args.cap_s * 0.55 / (measurements + 0.5 * sum(n <= CPU_UP_TO for n in sizes) * 2)
-    speeds(report, sizes, share if not args.smoke else 2.0)
-    table_s3_row(report, runs, particles, args.cap_s * 0.2 if not args.smoke else 2.0)
+    # The cap: speeds until 60 % of it (15 s a GPU measurement, 7.5 s for the CPU beside the
+    # smaller sizes, the rest building), then Table S3's row: building until 80 %, timing 10 %.
+    # (The smoke run builds one run of its row: the scaled-down path.)
+    began = time.perf_counter()
+    cap = args.cap_s
+    speeds(report, sizes, 2.0 if args.smoke else min(15.0, cap / 30), began + 0.6 * cap)
+    left = cap - (time.perf_counter() - began)
+    table_s3_row(report, runs, particles, max(0.0, left - 0.3 * cap) if not args.smoke else 0.0,
+                 2.0 if args.smoke else max(10.0, 0.1 * cap))  # fmt: skip
+    report.say(f"bench_gpu took {time.perf_counter() - began:.0f} s (cap {cap:g} s)")
     args.out.mkdir(parents=True, exist_ok=True)
     slug = "".join(c if c.isalnum() else "-" for c in name).strip("-")
     base = args.out / f"gpu-{slug}-{stamp}"

@@ -56,6 +56,9 @@ _P_SKIN = k.P_SKIN
 _P_LIST_RADIUS = k.P_LIST_RADIUS
 _P_TOUCH_GAP = k.P_TOUCH_GAP
 
+kernel = cuda.jit(cache=True)
+"""A kernel, kept in numba's on-disk cache (each process of a study would compile it again)."""
+
 SCAN_TILE = 64
 """Values one thread sums at each level of the grid's prefix sum (levels until one tile is
 left: 11 million cells take four)."""
@@ -80,7 +83,7 @@ def cell_width(prm: Any) -> float:
     return prm[_P_LIST_RADIUS] - prm[_P_SKIN]
 
 
-@cuda.jit
+@kernel
 def kinematics(
     n: int, row: int, targets: Any, base: Any, ext: Any, swarm: Any, pos: Any, vel: Any,
     body: Any, flags: Any, prm: Any, cycles: Any, offset: Any,
@@ -142,7 +145,7 @@ def _axis_cell(v: float, wall: float, width: float, full: int, side: int) -> int
     return c % side
 
 
-@cuda.jit
+@kernel
 def count_cells(
     n: int, pos: Any, swarm: Any, prm: Any, side: Any, full: Any, cell_base: Any,
     cell_of: Any, counts: Any,
@@ -162,7 +165,7 @@ def count_cells(
     _atomic_add(counts, c, 1)
 
 
-@cuda.jit
+@kernel
 def scan_tiles(count: int, values: Any, out: Any, sums: Any) -> None:
     """One level of the grid's prefix sum: exclusive sums within tiles of SCAN_TILE values, and
     each tile's total (which the next level sums the same way)."""
@@ -178,7 +181,7 @@ def scan_tiles(count: int, values: Any, out: Any, sums: Any) -> None:
     sums[t] = total
 
 
-@cuda.jit
+@kernel
 def add_offsets(count: int, out: Any, offsets: Any) -> None:
     """Adds each tile's offset (the next level's exclusive sum) to its values."""
     c = _thread()
@@ -186,14 +189,14 @@ def add_offsets(count: int, out: Any, offsets: Any) -> None:
         out[c] += offsets[c // SCAN_TILE]
 
 
-@cuda.jit
+@kernel
 def set_end(start: Any, cells: int, top: Any) -> None:
     """The end of the last cell: every particle (the last level's single total)."""
     if _thread() == 0:
         start[cells] = top[0]
 
 
-@cuda.jit
+@kernel
 def clear(cells: int, counts: Any) -> None:
     """Zeroes the cells' counts."""
     c = _thread()
@@ -201,7 +204,7 @@ def clear(cells: int, counts: Any) -> None:
         counts[c] = 0
 
 
-@cuda.jit
+@kernel
 def scatter(n: int, cell_of: Any, start: Any, fill: Any, members: Any) -> None:
     """Each particle into the next free place of its cell (in whatever order the atomics give)."""
     i = _thread()
@@ -211,7 +214,7 @@ def scatter(n: int, cell_of: Any, start: Any, fill: Any, members: Any) -> None:
     members[start[c] + _atomic_add(fill, c, 1)] = i
 
 
-@cuda.jit
+@kernel
 def order_cells(cells: int, start: Any, members: Any) -> None:
     """Each cell's members in index order (an insertion sort of a handful): the pair sums then
     add in the same order every run, whatever order the scatter's atomics came in."""
@@ -229,7 +232,7 @@ def order_cells(cells: int, start: Any, members: Any) -> None:
         members[b + 1] = value
 
 
-@cuda.jit
+@kernel
 def pairs(
     n: int, pos: Any, vel: Any, body: Any, flags: Any, swarm: Any, prm: Any, side: Any,
     full: Any, cell_base: Any, cell_of: Any, start: Any, members: Any,
@@ -315,7 +318,7 @@ def pairs(
     body[_B_FA, i] += f_attract
 
 
-@cuda.jit
+@kernel
 def settle(
     n: int, pos: Any, vel: Any, body: Any, swarm: Any, prm: Any, rects: Any, rect_lo: Any,
     rect_hi: Any, circles: Any, circle_lo: Any, circle_hi: Any, objects: Any, object_lo: Any,
@@ -384,7 +387,7 @@ def settle(
     vel[1, i] = vy
 
 
-@cuda.jit
+@kernel
 def objects_move(swarms: int, objects: Any, object_lo: Any, object_hi: Any, prm: Any) -> None:
     """Passive objects' positions from their velocities, reflected by the walls (one thread per
     swarm, kernels._objects_move)."""
@@ -408,7 +411,7 @@ def objects_move(swarms: int, objects: Any, object_lo: Any, object_hi: Any, prm:
             objects[m, _O_X + axis] = value
 
 
-@cuda.jit
+@kernel
 def objects_settle(
     swarms: int, objects: Any, object_lo: Any, object_hi: Any, first: Any, last: Any,
     pushes: Any, force: Any, rects: Any, rect_lo: Any, rect_hi: Any, circles: Any,

@@ -223,7 +223,7 @@ class DeviceSwarms:
             if plan is not None:
                 table[s] = (1.0, float(plan.first), plan.cycle_s, plan.rise_s)
                 offsets[self.first[s] : self.first[s + 1]] = plan.offset
-        self.d_cycles = cuda.to_device(table)
+        self.d_cycles.copy_to_device(table)  # (into the same memory: queued steps may read it)
         if table[:, 0].any():
             self.d_offset.copy_to_device(offsets)
         if not table[:, 0].all():

@@ -5,7 +5,9 @@ the pending runs are opened (placed, or resumed from their run folders) on the C
 the steps they have left into batches of at most BATCH_PARTICLES particles, and each batch is
 moved to the GPU as one Ensemble. Every run keeps its own folder, CSV observer, snapshots, seed
 and controller; results are measured and stored as the Dask path stores them, under the same
-runner name (the model is the same; the summary records the device).
+runner name (the model is the same; the summary records the device). Ctrl-C stops between
+chunks of steps: finished runs are kept, the batch's others start again next time (or resume
+from their last periodic snapshot, with --run-folders).
 """
 
 from __future__ import annotations

@@ -60,6 +60,14 @@ def imports() -> set[tuple[str, str, str]]:
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Import):
                 names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module == "particlebot":
+                # `from particlebot import resources` imports the module particlebot.resources.
+                names = [
+                    f"particlebot.{alias.name}"
+                    if (PACKAGE / f"{alias.name}.py").is_file() or (PACKAGE / alias.name).is_dir()
+                    else "particlebot"
+                    for alias in node.names
+                ]
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
                 names = [node.module]
             else:

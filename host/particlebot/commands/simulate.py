@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
 from particlebot.commands._progress import ProgressBar
+from particlebot.devices import DEVICES
 from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds, OptionError, float_arg, int_arg
 from particlebot.options import parse_float as parse_number
 
@@ -89,6 +90,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--json", action="store_true", help="end with one JSON line of the run's figures"
+    )
+    parser.add_argument(
+        "--device",
+        choices=DEVICES,
+        default="auto",
+        help="where the world steps: the CPU, a CUDA GPU, or auto (the GPU when there is one; "
+        "default)",
     )
     parser.add_argument(
         "--threads",
@@ -194,6 +202,7 @@ def stop_requests() -> Iterator[Callable[[], bool]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from particlebot.devices import DeviceError
     from particlebot.sim.runs.run import Run, RunError, check_run_folder, default_folder
     from particlebot.sim.runs.video import VideoError
     from particlebot.sim.scenarios.scenario import ScenarioError
@@ -215,6 +224,7 @@ def run(args: argparse.Namespace) -> int:
                 record_video=args.video,
                 duration_s=args.duration,
                 trajectory=_trajectory(args),
+                device=args.device,
             )
         else:
             from particlebot.sim.scenarios.build import build_world
@@ -229,7 +239,7 @@ def run(args: argparse.Namespace) -> int:
                 "(compiling or loading the kernels)",
                 file=sys.stderr,
             )
-            built = build_world(scenario)
+            built = build_world(scenario, device=args.device)
             for note in built.notes:
                 print(f"note: {note}", file=sys.stderr)
             folder = Path(args.output) if args.output else default_folder(scenario.name)
@@ -237,7 +247,7 @@ def run(args: argparse.Namespace) -> int:
                 built, folder, record_video=args.video, trajectory=_trajectory(args)
             )
         summary = _advance(session)
-    except (ScenarioError, RunError) as exc:
+    except (ScenarioError, RunError, DeviceError) as exc:
         return fail(f"simulate: {exc}")
     except VideoError as exc:
         return fail(f"simulate: {exc} (the run itself is complete in its folder)")

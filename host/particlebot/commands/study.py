@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import NoReturn, TextIO
 
 from particlebot.commands._common import fail, sigterm_as_interrupt
+from particlebot.devices import DEVICES, DeviceError
 from particlebot.studies.definitions import (
     PLACEMENTS,
     STUDIES,
@@ -95,6 +96,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="keep every run's CSV and snapshots here (a path all workers can write)",
     )
+    where.add_argument(
+        "--device",
+        choices=DEVICES,
+        default="cpu",
+        help="where the runs step: cpu (default), cuda (a GPU: without --scheduler the runs go "
+        "as ensembles, many in one launch; with one, each worker's runs on its own GPU), or auto",
+    )
     modes = parser.add_argument_group("instead of running")
     modes.add_argument("--list", action="store_true", help="show the runs and how many are done")
     modes.add_argument("--report-only", action="store_true", help="report what has finished")
@@ -168,8 +176,17 @@ def _study(
     specs = study.specs(options)
     default = f"results/{study.name}" + ("-quick" if options.quick else "")
     store = ResultStore(Path(args.results or default))
+    try:
+        # With a scheduler the workers' GPUs count, not this machine's: they check their own.
+        remote_gpu = args.scheduler is not None and args.device == "cuda"
+        from particlebot.sim.world.cuda.device import resolve as resolve_device
+
+        device = "cuda" if remote_gpu else resolve_device(args.device)
+    except DeviceError as exc:
+        return fail(f"study {study.name}: {exc}")
     if runner is None:
-        runner = SimulatorRunner(Path(args.run_folders) if args.run_folders else None)
+        folders = Path(args.run_folders) if args.run_folders else None
+        runner = SimulatorRunner(folders, device)
     if args.list:
         return _list(study, options, specs, store, runner.name)
     if args.report_only:
@@ -193,16 +210,24 @@ def _study(
         return fail(f"cannot write results to {store.root}: {exc.strerror or exc}")
     print(_plan_line(study, options, specs), file=sys.stderr)
     try:
-        outcome = run_study(
-            specs,
-            store,
-            runner,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            label=study.name,
-            stream=stream,
-            verbose=args.verbose,
-        )
+        if device == "cuda" and args.scheduler is None and isinstance(runner, SimulatorRunner):
+            from particlebot.studies.batched import run_batched
+
+            outcome = run_batched(
+                specs, store, runner.name, run_folders=runner.run_folders, label=study.name,
+                stream=stream,
+            )  # fmt: skip
+        else:
+            outcome = run_study(
+                specs,
+                store,
+                runner,
+                scheduler=args.scheduler,
+                workers=args.workers,
+                label=study.name,
+                stream=stream,
+                verbose=args.verbose,
+            )
     except ClusterError as exc:
         return fail(str(exc))
     _report(study, options, specs, store, runner.name, outcome.failed)

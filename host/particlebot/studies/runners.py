@@ -31,6 +31,9 @@ class SimulatorRunner:
 
     run_folders: Path | None = None
     """Keep each run's CSV and snapshots in run_folders/RUN_ID (a path every worker can write)."""
+    device: str = "cpu"
+    """Where each run's world steps (World's device): "cuda" gives every run the worker's GPU
+    (the one CUDA_VISIBLE_DEVICES shows it)."""
 
     @property
     def name(self) -> str:
@@ -55,7 +58,7 @@ class SimulatorRunner:
         threads = numba.get_num_threads()
         numba.set_num_threads(1)
         try:
-            return seam.run_one(spec, folder, progress)
+            return seam.run_one(spec, folder, progress, self.device)
         finally:
             numba.set_num_threads(threads)
 
@@ -66,19 +69,24 @@ def execute(runner: Runner, spec: RunSpec, progress: ShareDone | None = None) ->
     (the engine passes one that reports to the client)."""
     start = time.perf_counter()
     outcome = runner(spec, progress)
+    return record_of(runner.name, spec, outcome, time.perf_counter() - start)
+
+
+def record_of(runner: str, spec: RunSpec, outcome: SimOutcome, wall_s: float) -> RunRecord:
+    """A run's result as the store keeps it: measured, stamped with who made it and where."""
     metrics = spec.measure.evaluate(spec.setup, outcome)
     return RunRecord(
         run_id=spec.run_id,
         study=spec.study,
         cell=spec.cell_dict,
         seed=spec.seed,
-        runner=runner.name,
+        runner=runner,
         metrics=metrics,
         summary=dict(outcome.summary),
         track=outcome.track.to_json(),
         setup=asdict(spec.setup),
         measure=describe(spec.measure),
-        wall_s=time.perf_counter() - start,
+        wall_s=wall_s,
         worker=_worker_address(),
         pid=os.getpid(),
     )

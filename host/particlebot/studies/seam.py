@@ -22,7 +22,7 @@ import numpy as np
 
 from particlebot.errors import ParticlebotError
 from particlebot.sim.particles.model.published import PublishedSettings
-from particlebot.sim.runs.run import SCENARIO_FILE, Run, latest_snapshot
+from particlebot.sim.runs.run import SCENARIO_FILE, Run, Summary, latest_snapshot
 from particlebot.sim.runs.simcsv import read_published_csv
 from particlebot.sim.scenarios.build import build_world, place_swarm
 from particlebot.sim.scenarios.scenario import (
@@ -212,42 +212,65 @@ def track_interval_s(setup: WorldSetup) -> float:
 
 
 def run_one(
-    spec: RunSpec, run_dir: Path | None = None, progress: ShareDone | None = None
+    spec: RunSpec,
+    run_dir: Path | None = None,
+    progress: ShareDone | None = None,
+    device: str = "cpu",
 ) -> SimOutcome:
     """Simulates spec.setup and returns what the study's measure needs, in the study frame.
 
     run_dir: where the run keeps its folder (the published CSV, npz snapshots, the scenario as
     run; a path every worker can write): a retried run resumes there from its last snapshot.
     None: a temporary folder, removed afterwards. progress hears the share of the steps done, about
-    every CHUNK_WALL_S of wall time.
+    every CHUNK_WALL_S of wall time. device: where the world steps (World's).
     """
-    return simulate(spec.setup, run_dir, progress)
+    return simulate(spec.setup, run_dir, progress, device)
 
 
 def simulate(
-    setup: WorldSetup, run_dir: Path | None = None, progress: ShareDone | None = None
+    setup: WorldSetup,
+    run_dir: Path | None = None,
+    progress: ShareDone | None = None,
+    device: str = "cpu",
 ) -> SimOutcome:
     """run_one for a bare setup. A kept run folder gets the simulator's pictures of the swarm
     and its track; a temporary one does not (they would cost more than a small run)."""
     if run_dir is None:
         with tempfile.TemporaryDirectory(prefix="particlebot-study-") as scratch:
-            return _run_in(setup, Path(scratch) / "run", pictures=False, progress=progress)
-    return _run_in(setup, run_dir, pictures=True, progress=progress)
+            return _run_in(setup, Path(scratch) / "run", False, progress, device)
+    return _run_in(setup, run_dir, True, progress, device)
 
 
 def _run_in(
-    setup: WorldSetup, folder: Path, pictures: bool, progress: ShareDone | None = None
+    setup: WorldSetup,
+    folder: Path,
+    pictures: bool,
+    progress: ShareDone | None = None,
+    device: str = "cpu",
 ) -> SimOutcome:
+    framed, run = open_run(setup, folder, pictures, device)
+    report = None if progress is None else _share_of_steps(progress)
+    return outcome_of(setup, framed, run, run.advance(progress=report), folder)
+
+
+def open_run(
+    setup: WorldSetup, folder: Path, pictures: bool, device: str = "cpu"
+) -> tuple[Framed, Run]:
+    """A setup's run in folder, resumed from its last snapshot when it has one, else started
+    afresh; its world on `device`."""
     framed = frame(setup)
     resumed = (folder / SCENARIO_FILE).is_file() and latest_snapshot(folder) is not None
     if resumed:
-        run = Run.resume(folder, pictures=pictures)
-    else:
-        if folder.exists():
-            shutil.rmtree(folder)  # a start that died before its first snapshot
-        run = start_run(framed, folder, pictures)
-    report = None if progress is None else _share_of_steps(progress)
-    summary = run.advance(progress=report)
+        return framed, Run.resume(folder, pictures=pictures, device=device)
+    if folder.exists():
+        shutil.rmtree(folder)  # a start that died before its first snapshot
+    return framed, start_run(framed, folder, pictures, device)
+
+
+def outcome_of(
+    setup: WorldSetup, framed: Framed, run: Run, summary: Summary, folder: Path
+) -> SimOutcome:
+    """What a finished run gives its study's measure, in the study frame."""
     if not summary.finished:
         raise RuntimeError(f"the run in {folder} stopped at {summary.t_s:g} s")
     dx, dy = framed.offset
@@ -288,8 +311,9 @@ def _share_of_steps(progress: ShareDone) -> Callable[[Run, float], None]:
     return report
 
 
-def start_run(framed: Framed, folder: Path, pictures: bool) -> Run:
-    """A new run of a framed setup in folder (which must not exist or be empty)."""
+def start_run(framed: Framed, folder: Path, pictures: bool, device: str = "cpu") -> Run:
+    """A new run of a framed setup in folder (which must not exist or be empty), its world on
+    `device`."""
     scenario = framed.scenario
     with tempfile.TemporaryDirectory(prefix="particlebot-study-") as scratch:
         if framed.positions is not None:
@@ -302,7 +326,7 @@ def start_run(framed: Framed, folder: Path, pictures: bool) -> Run:
                 swarm=replace(scenario.swarm, placement=PlacementKind.FILE, file=path),
             )
         try:
-            built = build_world(scenario)
+            built = build_world(scenario, device=device)
         except ScenarioError as exc:
             raise SetupError(str(exc).replace("study: ", "", 1)) from None
         return Run.start(built, folder, pictures=pictures)

@@ -38,6 +38,7 @@ from particlebot.sim.scenarios.build import Built
 from particlebot.sim.scenarios.scenario import PlacementKind, Scenario
 from particlebot.sim.scenarios.toml_file import read_scenario
 from particlebot.sim.scenarios.write import to_published_cfg, to_toml
+from particlebot.sim.world.cuda.device import DeviceError
 from particlebot.sim.world.world import Snapshot, World
 
 SCENARIO_FILE = "scenario.toml"
@@ -213,15 +214,19 @@ class Run:
         duration_s: float | None = None,
         pictures: bool = True,
         trajectory: tuple[str, ...] = (),
+        device: str = "cpu",
     ) -> Run:
         """Continues a run from its latest snapshot; the CSV and trajectory files lose what was
         written after it (the resumed run writes it again, the same). duration_s moves the run's
         end (later or earlier, not before the snapshot), and the folder's scenario says so.
-        trajectory: formats to write from now on besides those the run writes already."""
+        trajectory: formats to write from now on besides those the run writes already. device:
+        where the world steps (World's)."""
         snapshot = check_run_folder(folder)
         scenario = read_scenario(folder / SCENARIO_FILE)
         try:
-            world = World.from_snapshot(Snapshot.load(snapshot))
+            world = World.from_snapshot(Snapshot.load(snapshot), device=device)
+        except DeviceError:
+            raise
         except (OSError, ValueError, KeyError, EOFError) as exc:
             raise RunError(f"{snapshot}: cannot be read ({exc})") from None
         try:

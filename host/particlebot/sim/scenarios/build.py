@@ -32,6 +32,7 @@ from particlebot.sim.scenarios.scenario import (
 )
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import DeadParticles, PassiveObject
+from particlebot.sim.world.cuda.device import DeviceError
 from particlebot.sim.world.light import Lamp
 from particlebot.sim.world.params import PhysicsParams
 from particlebot.sim.world.world import World
@@ -105,9 +106,12 @@ def place_swarm(scenario: Scenario) -> Placement:
     return placement
 
 
-def build_world(scenario: Scenario, controller: Controller | None = None) -> Built:
+def build_world(
+    scenario: Scenario, controller: Controller | None = None, device: str = "cpu"
+) -> Built:
     """The World a scenario describes, with its controller bound (`controller`, when given,
-    instead of the scenario's: the swarm of firmware particles drives the world with theirs);
+    instead of the scenario's: the swarm of firmware particles drives the world with theirs),
+    on `device` (World's; DeviceError, a ValueError too, when it cannot be had);
     ScenarioError (one line that names the file, line and key) when the scenario cannot be put
     down as written."""
     params = scenario.physics
@@ -171,7 +175,10 @@ def build_world(scenario: Scenario, controller: Controller | None = None) -> Bui
             radius=radii,
             seed=scenario.seed,
             precision=scenario.precision,
+            device=device,
         )
+    except DeviceError:
+        raise
     except ValueError as exc:
         raise scenario.error("swarm", f"the world refuses this scenario: {exc}") from None
     return Built(world, scenario, robot, notes)

@@ -6,18 +6,26 @@ import math
 import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numba
 import numpy as np
 import numpy.typing as npt
 
-from particlebot.sim.particles.model.controller import BoolArray, Controller, FloatArray
+from particlebot.sim.particles.model.controller import (
+    BoolArray,
+    Controller,
+    CycleCommands,
+    FloatArray,
+)
 from particlebot.sim.world import kernels as k
 from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
 from particlebot.sim.world.light import Lamp, LightField, ShadowMode
 from particlebot.sim.world.params import NeighbourSearch, PhysicsParams
+
+if TYPE_CHECKING:
+    from particlebot.sim.world.cuda.swarms import DeviceSwarms
 
 Precision = Literal["float64", "float32"]
 Observer = Callable[["World"], None]
@@ -30,6 +38,9 @@ CHUNKS = 16
 force sums, added chunk by chunk) do not depend on the machine."""
 TARGET_BUDGET = 1 << 16
 """Commanded radii buffered ahead (floats): ~6,500 steps of 10 particles per compiled call."""
+TARGET_BUDGET_CUDA = 1 << 22
+"""The same on the GPU (32 MB): a block of steps is one upload of commands and then only kernel
+launches, so the longer the better (400 steps of a 10,000-particle swarm)."""
 TOUCH_GAP = 0.9e-3
 """A free particle joins the robot when its gap to a member closes below this (m): the magnets'
 clamp gap, where they lock."""
@@ -77,6 +88,9 @@ class World:
     servo moves them (stall limit); positions advance by the old velocities and walls reflect;
     forces from the new positions and old velocities (contacts, magnets, obstacles, passive
     objects); velocities with ground friction; t += dt.
+
+    device: "cpu" (the compiled CPU kernels), "cuda" (the GPU: particlebot.sim.world.cuda,
+    which says what runs where and what differs) or "auto" (CUDA when a real GPU is present).
     """
 
     _nbr: npt.NDArray[np.int32]
@@ -99,6 +113,7 @@ class World:
         velocity: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
         seed: int = 0,
         precision: Precision = "float64",
+        device: str = "cpu",
     ) -> None:
         self.params = params if params is not None else PhysicsParams()
         self.arena = arena if arena is not None else Arena()
@@ -160,8 +175,11 @@ class World:
             self._pos, self._ref, self._vel, self._body, self._flags, self._ext,
             self._nbr, self._ncount, self._bounds, self._prm, True, self.threads,
         )  # fmt: skip
+        self._gpu: DeviceSwarms | None = None
+        self._cycle: CycleCommands | None = None  # the GPU's commands for this block, if any
         self._refresh_shadows()
         controller.bind(n, np.random.default_rng(controller_seed))
+        self._place_on(device)
 
     # ---- construction helpers ----------------------------------------------------------------
 
@@ -249,6 +267,34 @@ class World:
         self._stale_members = np.arange(n if self._stale else 0, dtype=np.int64)
         self._stale_start = np.zeros(k.STALE_GRID**2 + 1 if self._stale else 1, dtype=np.int64)
 
+    def _place_on(self, device: str) -> None:
+        """Puts the world on its device: on "cuda", its state goes to the GPU (DeviceError when
+        there is none, or for what the GPU backend has not got)."""
+        from particlebot.sim.world.cuda.device import DeviceError, resolve
+
+        self.device = resolve(device)
+        self._gpu_index = 0
+        if self.device == "cpu":
+            return
+        if self._stale:
+            raise DeviceError("the published stale grid (neighbour_search) runs on the CPU only")
+        from particlebot.sim.world.cuda.swarms import DeviceSwarms
+
+        rows = max(1, min(TARGET_BUDGET_CUDA // self.count, 8192))
+        self._targets = np.full((rows, self.count), np.nan)
+        self._gpu = DeviceSwarms([self])
+
+    def _host(self) -> None:
+        """Brings the host arrays up to date with the GPU (a CUDA world: the device state moves
+        on between reads, and is copied back only when something reads it)."""
+        if self._gpu is not None:
+            self._gpu.pull(self._gpu_index)
+
+    def _changed(self) -> None:
+        """The host changed the state: a CUDA world copies it to the GPU before stepping on."""
+        if self._gpu is not None:
+            self._gpu.dirty[self._gpu_index] = True
+
     # ---- what the world is now ---------------------------------------------------------------
 
     @property
@@ -305,6 +351,7 @@ class World:
     def centroid(self, members_only: bool = False) -> tuple[float, float]:
         """Mean centre of every body, passive objects included, as the published CSV has it;
         members_only: of the robot's particles alone (no free, detached or object bodies)."""
+        self._host()
         if members_only:
             members = self._flags[k.F_KIND] == k.MEMBER
             return float(self._pos[0, members].mean()), float(self._pos[1, members].mean())
@@ -341,17 +388,15 @@ class World:
 
     def step(self, n: int = 1) -> None:
         """Advances n steps, in as few compiled calls as the controller and observers allow."""
+        if self._gpu is not None and self._gpu.swarms > 1:
+            raise RuntimeError("this world is one of an ensemble's: step the Ensemble")
         end = self._steps + n
         while self._steps < end:
-            if not self._dead_done and self._steps >= self._dead_step():
-                self._kill()
-            block = end - self._steps
-            for o in self._observers:
-                block = min(block, o.every - self._steps % o.every)
-            if not self._dead_done:
-                block = min(block, max(self._dead_step() - self._steps, 1))
-            rows = self._command(block)
-            if self._stale:
+            rows = self._begin_block(end)
+            if self._gpu is not None:
+                self._gpu.advance(rows, self._targets, (self._cycle,))
+                rebuilds = rows  # (the GPU bins the particles afresh at every step)
+            elif self._stale:
                 rebuilds = k.advance_stale(
                     rows, self._steps, max(1, round(self.params.sort_interval / self.params.dt)),
                     self._targets, self._ext, self._pos, self._ref, self._vel, self._body,
@@ -366,15 +411,36 @@ class World:
                     self._rects, self._circles, self._objects, self._acc,
                     self._bounds, self._pair_index, self._pair_values, self._prm, self.threads,
                 )  # fmt: skip
-            self.rebuilds += rebuilds
-            self._steps += rows
-            self._view.invalidate()
-            for o in list(self._observers):
-                if self._steps % o.every == 0:
-                    o.callback(self)
+            self._end_block(rows, rebuilds)
+
+    def _begin_block(self, end: int) -> int:
+        """Kills the dead when due and commands the next block of steps (before `end`); returns
+        how many steps the targets buffer holds."""
+        if not self._dead_done and self._steps >= self._dead_step():
+            self._kill()
+        block = end - self._steps
+        for o in self._observers:
+            block = min(block, o.every - self._steps % o.every)
+        if not self._dead_done:
+            block = min(block, max(self._dead_step() - self._steps, 1))
+        return self._command(block)
+
+    def _end_block(self, rows: int, rebuilds: int) -> None:
+        """Counts a block of `rows` steps done and calls the observers that are due."""
+        self.rebuilds += rebuilds
+        self._steps += rows
+        self._view.invalidate()
+        for o in list(self._observers):
+            if self._steps % o.every == 0:
+                o.callback(self)
 
     def _command(self, block: int) -> int:
-        """Fills the targets buffer for up to `block` steps; returns how many rows it holds."""
+        """Fills the targets buffer for up to `block` steps; returns how many rows it holds. On
+        the GPU, a controller that can (cycle_ahead) leaves the commands to the GPU instead."""
+        if self._gpu is not None:
+            self._cycle = self.controller.cycle_ahead(self._view, self.params.dt, block)
+            if self._cycle is not None:
+                return min(self._cycle.rows, block)
         rows = min(block, self._targets.shape[0])
         done = self.controller.command_ahead(self._view, self.params.dt, self._targets[:rows])
         if done <= 0:
@@ -391,6 +457,7 @@ class World:
             raise ValueError(f"no particle {index} (0..{self.count - 1})")
         if not (math.isfinite(x) and math.isfinite(y)):
             raise ValueError("a particle's place must be finite")
+        self._host()
         slot = int(self._internal_slots(np.array([index]))[0])
         radius = float(self._body[k.B_R, slot])
         limit = self.params.half_width - radius
@@ -412,6 +479,7 @@ class World:
                 self._pos, -self.params.half_width, 2 * self.params.r_max, self._stale_hashes,
                 self._stale_members, self._stale_start,
             )  # fmt: skip
+        self._changed()
         self._view.invalidate()
 
     def _dead_step(self) -> int:
@@ -421,6 +489,7 @@ class World:
         """Chooses the dead particles (from the run's seed, among the robot's living members) and
         stops them; detached ones lose their magnets and leave the robot."""
         self._dead_done = True
+        self._host()
         flags = self._flags
         eligible = np.flatnonzero(
             self._external(flags[k.F_ALIVE]).astype(np.bool_)
@@ -433,11 +502,13 @@ class World:
         if self.dead.detach:
             flags[k.F_KIND, slots] = k.DETACHED
             self._body[k.B_MAG, slots] = 0.0
+        self._changed()
         self._view.invalidate()
 
     def _refresh_shadows(self) -> BoolArray:
         """Which particles the obstacles shadow now (caller's order); under mode STILL they are
         held, and particles that came out of the shadow may actuate again."""
+        self._host()
         shadowed = np.zeros(self.count, dtype=np.bool_)
         if self.shadow != ShadowMode.IGNORE and (self.arena.rects or self.arena.circles):
             x, y = self.positions()
@@ -448,10 +519,12 @@ class World:
         flags[k.F_ACTING] = (
             (flags[k.F_KIND] == k.MEMBER) & (flags[k.F_ALIVE] == 1) & (flags[k.F_HELD] == 0)
         )
+        self._changed()
         return shadowed
 
     def _external(self, row: npt.NDArray[Any]) -> npt.NDArray[Any]:
         """A per-particle row in the caller's order."""
+        self._host()
         out = np.empty(row.shape, dtype=row.dtype)
         out[self._ext] = row
         return out
@@ -465,6 +538,7 @@ class World:
 
     def snapshot(self) -> Snapshot:
         """Everything needed to continue this run exactly (observers are not included)."""
+        self._host()
         setup = {
             "params": self.params,
             "arena": self.arena,
@@ -494,8 +568,9 @@ class World:
         return Snapshot(pickle.loads(pickle.dumps(setup)), arrays)
 
     @classmethod
-    def from_snapshot(cls, snapshot: Snapshot) -> World:
-        """The world a snapshot was taken of, ready to step on as if it had never stopped."""
+    def from_snapshot(cls, snapshot: Snapshot, device: str = "cpu") -> World:
+        """The world a snapshot was taken of, ready to step on as if it had never stopped (on
+        `device`, as World's)."""
         s = snapshot.setup
         a = snapshot.arrays
         world = cls.__new__(cls)
@@ -530,6 +605,9 @@ class World:
         if world._stale and "stale_hashes" in a:
             world._stale_hashes = a["stale_hashes"].copy()
             k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)
+        world._gpu = None
+        world._cycle = None
+        world._place_on(device)
         return world
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -60,6 +61,19 @@ class WorldView(Protocol):
         particle waits contracted)."""
 
 
+@dataclass(frozen=True)
+class CycleCommands:
+    """Commands a GPU computes itself, for `rows` steps from step number `first`: particle i's
+    radius at step s is the published cycle's at clock ((first + s) dt) mod cycle_s shifted by
+    offset[i] (see published._radius_at): rising from r_min over rise_s, falling, then NaN."""
+
+    rows: int
+    first: int
+    offset: FloatArray
+    cycle_s: float
+    rise_s: float
+
+
 class Controller(ABC):
     """Decides every particle's commanded radius each step, vectorised over the swarm.
 
@@ -89,6 +103,12 @@ class Controller(ABC):
         (round(view.t / dt) + j) x dt. The default, 0, means "not supported": command() is called
         every step."""
         return 0
+
+    def cycle_ahead(self, view: WorldView, dt: float, rows: int) -> CycleCommands | None:
+        """Optional GPU path: command_ahead's steps as a formula the GPU evaluates (no commands
+        uploaded), for up to `rows` steps; None (the default) means "not supported", and the
+        world uploads command_ahead's or command()'s rows."""
+        return None
 
     def phase(self, view: WorldView) -> FloatArray:
         """Where each particle is in its cycle, 0..1 (NaN where it is not cycling); pictures colour

@@ -24,7 +24,12 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from particlebot.sim.particles.model.controller import Controller, FloatArray, WorldView
+from particlebot.sim.particles.model.controller import (
+    Controller,
+    CycleCommands,
+    FloatArray,
+    WorldView,
+)
 
 _PARALLEL_FROM = 4096
 """Below this many particles the profile is filled inline (a parallel region costs more)."""
@@ -142,6 +147,15 @@ class PublishedController(Controller):
         rows = max(1, int(np.searchsorted(times, due, side="left")))
         self._fill(times[:rows], view, out[:rows])
         return rows
+
+    def cycle_ahead(self, view: WorldView, dt: float, rows: int) -> CycleCommands | None:
+        first = round(view.t / dt)
+        self._update_if_due(view, view.t)
+        times = (first + np.arange(rows, dtype=np.float64)) * dt
+        due = self._updates * self.settings.update_s - _TIME_TOLERANCE
+        rows = max(1, int(np.searchsorted(times, due, side="left")))
+        s = self.settings
+        return CycleCommands(rows, first, self._offset, s.cycle_s, s.rise_s)
 
     def phase(self, view: WorldView) -> FloatArray:
         s = self.settings

@@ -16,8 +16,10 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
     frozenset(layer.split())
     for layer in (
         "errors",  # the root of every error
-        "closing options toml_lines protocol devices resources fileio",  # helpers; the protocol (shared/protocol.toml)
-        "resets firmware fleet videowriter",  # reset causes; the native library; the fleet file; MP4s
+        # helpers; where artefacts live; the protocol (shared/protocol.toml)
+        "closing options toml_lines protocol devices resources fileio",
+        # reset causes; the native firmware library; the fleet file; the MP4 writer
+        "resets firmware fleet videowriter",
         "sim",  # the simulator: world, particles, air, runs, scenarios
         "radio",  # radios, real and simulated (a simulated radio drives sim)
         "session",  # frames over a radio

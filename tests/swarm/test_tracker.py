@@ -281,6 +281,28 @@ def test_stop_with_no_particles_known_ends_after_its_burst_unconfirmed_never_a_s
     assert model.notes[-1].level == "warning"
 
 
+@pytest.mark.parametrize(
+    ("roster", "listened_s", "verdict"),
+    [
+        (None, 3.0, Verdict.UNCONFIRMED),  # heard for 3 s: others may be out there, moving
+        (None, 10.0, Verdict.CONFIRMED),  # heard for as long as listen_s asks
+        (range(1, 4), 3.0, Verdict.CONFIRMED),  # the fleet says who there is
+    ],
+)
+def test_stop_is_confirmed_only_by_a_base_station_that_knows_the_swarm(
+    sink: Sink, clock: ManualClock, roster: range | None, listened_s: float, verdict: Verdict
+) -> None:
+    model = SwarmTracker(sink, clock, roster=roster, listen_s=10.0)
+    clock.advance(listened_s)
+    campaign = stop_running(model, clock, range(1, 4))
+    hear_all(model, clock, range(1, 4), State.IDLE)
+    assert campaign.done and campaign.verdict is verdict
+    assert campaign.success == (verdict is Verdict.CONFIRMED)
+    if verdict is Verdict.UNCONFIRMED:
+        assert campaign.outcome.startswith("STOP confirmed by the 3 particle(s) heard, but the ")
+        assert "listened for only 3.0 s" in campaign.outcome
+
+
 def test_pings_go_to_four_particles_a_round_those_asked_least_first(
     model: SwarmTracker, clock: ManualClock, sink: Sink
 ) -> None:

@@ -18,6 +18,7 @@ from tests.analysis.conftest import Clip
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_track_then_stats_on_a_synthetic_run(
     paper_clip: Clip, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -53,6 +54,7 @@ def test_track_then_stats_on_a_synthetic_run(
     assert (tmp_path / "t.csv").read_text().splitlines()[1].startswith("paper.track.csv,track,4,9,")
 
 
+@pytest.mark.slow
 def test_track_with_marked_points_on_a_tilted_camera(
     tilted_clip: Clip, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

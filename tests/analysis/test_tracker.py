@@ -35,6 +35,7 @@ def errors(clip: Clip) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return np.array(to_region), np.array(to_centres), [d.quality for d in result.detections]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["paper_clip", "tilted_clip"])
 def test_the_centroid_is_within_1_cm_median_and_3_cm_worst_of_the_truth(
     name: str, request: pytest.FixtureRequest

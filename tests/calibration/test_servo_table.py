@@ -77,6 +77,7 @@ def monotonic_tables() -> st.SearchStrategy[list[int]]:
     return st.tuples(pulses, st.booleans()).map(lambda pair: sorted(pair[0], reverse=pair[1]))
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(old=monotonic_tables(), new=monotonic_tables())
 def test_every_intermediate_table_of_the_write_order_is_monotonic(

@@ -6,6 +6,7 @@ import asyncio
 from collections.abc import Callable, Coroutine
 from typing import Any
 
+import pytest
 from textual import events
 from textual.geometry import Region
 from textual.pilot import Pilot
@@ -252,6 +253,7 @@ def test_the_keys_are_explained_on_screen() -> None:
     run_app(test)
 
 
+@pytest.mark.slow
 def test_at_80_by_24_help_and_params_open_a_page_that_reads_at_that_width() -> None:
     # In the 8-line messages pane the help showed its last four commands, each summary squeezed
     # into the columns left beside the longest usage.
@@ -407,6 +409,7 @@ def test_seconds_since_heard_fit_their_column_however_long() -> None:
     ]  # fmt: skip
 
 
+@pytest.mark.slow
 def test_at_80_by_24_a_bigger_swarm_scrolls_and_says_how_big_it_is() -> None:
     async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
         app = console(pilot)
@@ -546,6 +549,7 @@ def test_quitting_idle_particles_asks_nothing() -> None:
     run_app(test)
 
 
+@pytest.mark.slow
 def test_start_during_a_run_asks_before_restarting_it() -> None:
     async def test(pilot: Pilot[int], radio: FakeRadio) -> None:
         app = console(pilot)

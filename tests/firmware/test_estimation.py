@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
+import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -182,6 +183,7 @@ close_groups = st.tuples(st.integers(0, 1023), st.sampled_from([2, 4, 10, 40])).
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=600, deadline=None)
 @given(
     readings=st.one_of(

@@ -253,6 +253,7 @@ def test_creating_over_an_existing_fleet_is_refused(tmp_path: Path) -> None:
 # ---- the writer --------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @given(st.text())
 def test_any_note_comes_back_from_the_file_unchanged(text: str) -> None:
     fleet = Fleet.new()

@@ -85,6 +85,7 @@ def test_every_line_is_one_json_object_with_time_sender_bytes_and_fields(tmp_pat
     assert len(raw) == 3 and raw[1]["hex"].startswith(b"noise".hex())
 
 
+@pytest.mark.slow
 def test_a_killed_logger_leaves_a_log_whose_every_line_parses(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
@@ -109,6 +110,7 @@ def test_a_killed_logger_leaves_a_log_whose_every_line_parses(tmp_path: Path) ->
     assert records[-1]["kind"] != "end"  # it really was killed mid-session
 
 
+@pytest.mark.slow
 def test_a_log_ended_by_sigterm_is_closed_properly(tmp_path: Path) -> None:
     process = subprocess.Popen(
         log_command("virtual://2?speed=20", tmp_path),
@@ -249,6 +251,7 @@ def test_csv_shows_state_method_param_and_result_by_name(tmp_path: Path) -> None
     assert (note["direction"], note["note"]) == ("note", "STOP confirmed")
 
 
+@pytest.mark.slow
 def test_csv_to_a_reader_that_stops_early_ends_quietly(tmp_path: Path) -> None:
     path = tmp_path / "long.jsonl"
     writer = JsonlWriter(path)

@@ -44,6 +44,7 @@ def mutated_streams(draw: st.DrawFn) -> bytes:
     return stream
 
 
+@pytest.mark.slow
 @settings(max_examples=400, derandomize=True)
 @given(stream=mutated_streams())
 def test_cpp_parser_and_python_decoder_accept_exactly_the_same_frames(stream: bytes) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Hashable
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -64,6 +65,7 @@ def _split(stream: bytes, data: st.DataObject) -> list[bytes]:
     return [stream[a:b] for a, b in itertools.pairwise(bounds)]
 
 
+@pytest.mark.slow
 @settings(max_examples=300, derandomize=True)
 @given(data=st.data())
 def test_decoder_matches_the_naive_reference_scan_on_mutated_streams(data: st.DataObject) -> None:
@@ -82,6 +84,7 @@ def test_decoder_matches_the_naive_reference_scan_on_mutated_streams(data: st.Da
     assert {key: counts[key] for key in expected.counts} == expected.counts
 
 
+@pytest.mark.slow
 @settings(max_examples=200, derandomize=True)
 @given(frames=st.lists(frames_st, min_size=1, max_size=6), data=st.data())
 def test_every_frame_not_overlapped_by_garbage_is_recovered(

@@ -183,6 +183,7 @@ def test_a_refused_id_ends_the_session_before_any_flash_is_written(
 # ---- one board after another ----
 
 
+@pytest.mark.slow
 @needs_avrdude
 def test_many_boards_go_on_past_a_board_that_never_resets_and_one_that_fails_to_verify(
     bench_factory: BenchFactory, image: FirmwareImage, fleet_path: Path
@@ -219,6 +220,7 @@ def test_many_boards_go_on_past_a_board_that_never_resets_and_one_that_fails_to_
     assert "tty-no-bootloader-run" in text and "tty-bad-flash-run" in text
 
 
+@pytest.mark.slow
 @needs_avrdude
 def test_many_boards_without_usb_locations_are_told_apart_by_their_ports(
     bench_factory: BenchFactory, image: FirmwareImage, fleet_path: Path

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.support.repo import REPO_ROOT
 
 SCRIPT = REPO_ROOT / "research" / "studies_figures.py"
@@ -40,6 +42,7 @@ def test_every_study_csv_is_a_summary() -> None:
             assert {"particles", "metric", "runs", "planned", "mean", "sd"} <= set(header), path
 
 
+@pytest.mark.slow
 def test_the_dead_figures_redraw_from_the_kept_data_alone(tmp_path: Path) -> None:
     done = _figures(tmp_path, "dead")
     assert done.returncode == 0, done.stderr

@@ -126,6 +126,7 @@ def test_stats_reads_the_run_folder_and_finds_the_lamp(tmp_path: Path) -> None:
     assert len(series.t_s) == 9
 
 
+@pytest.mark.slow
 def test_a_stopped_run_resumes_to_exactly_the_uninterrupted_result(tmp_path: Path) -> None:
     Run.start(build_world(tiny()), tmp_path / "straight").advance()
     stopped = Run.start(build_world(tiny()), tmp_path / "stopped").advance(stop_after(3))
@@ -145,6 +146,7 @@ def test_a_stopped_run_resumes_to_exactly_the_uninterrupted_result(tmp_path: Pat
     assert resumed.centroid_start == pytest.approx(stopped.centroid_start)
 
 
+@pytest.mark.slow
 def test_resuming_drops_rows_written_after_the_last_snapshot(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     Run.start(build_world(tiny()), folder).advance(stop_after(4))
@@ -189,6 +191,7 @@ def test_resume_wants_a_run_folder_with_a_snapshot(tmp_path: Path) -> None:
         Run.resume(folder)
 
 
+@pytest.mark.slow
 def test_a_video_is_made_of_the_runs_frames(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     Run.start(build_world(tiny()), folder, record_video=True).advance()

@@ -51,6 +51,7 @@ def test_a_quick_run_from_flags_ends_with_one_json_line(
     assert len((folder / "run.csv").read_text().splitlines()) == 2 + 4
 
 
+@pytest.mark.slow
 def test_threads_sets_how_many_threads_a_large_swarm_steps_on(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

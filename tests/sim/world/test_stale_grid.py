@@ -28,6 +28,7 @@ def _shot(search: NeighbourSearch, sort_interval: float = 180.0) -> World:
                  velocity=(np.array([0.0, -2.5]), np.zeros(2)))  # fmt: skip
 
 
+@pytest.mark.slow
 def test_a_pair_that_drifted_from_its_listing_is_felt_by_one_side_only() -> None:
     exact = _shot(NeighbourSearch.EXACT)
     stale = _shot(STALE)

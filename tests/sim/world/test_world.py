@@ -145,6 +145,7 @@ def test_a_snapshot_holding_a_steps_forces_resumes_as_one_without() -> None:
     assert np.abs(a.state().vx).max() > 0  # (something moved)
 
 
+@pytest.mark.slow
 def test_a_large_swarm_resumes_bit_for_bit_between_re_orderings(tmp_path: Path) -> None:
     # A large swarm rebuilding its lists at every step re-orders its particles only at every
     # SORT_EVERY-th build (kernels.advance); a snapshot taken in between must resume exactly as

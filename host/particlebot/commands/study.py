@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import NoReturn, TextIO
 
 from particlebot.commands._common import fail, sigterm_as_interrupt
+from particlebot.fileio import write_text
 from particlebot.studies.definitions import (
     PLACEMENTS,
     STUDIES,
@@ -22,7 +23,7 @@ from particlebot.studies.definitions import (
 )
 from particlebot.studies.runners import Runner, SimulatorRunner
 from particlebot.studies.spec import RunSpec
-from particlebot.studies.store import ResultStore, write_text_atomically
+from particlebot.studies.store import ResultStore
 
 SWEEP_FLAGS = {study.sweep.flag: study.name for study in STUDIES.values() if study.sweep}
 INTERRUPTED = 130
@@ -259,10 +260,8 @@ def _report(
         return 0 if not failed else 1
     try:
         store.root.mkdir(parents=True, exist_ok=True)
-        write_text_atomically(store.root / "summary.csv", csv_text(study, stats))
-        write_text_atomically(
-            store.root / "report.md", markdown(study, options, stats, failed, runner)
-        )
+        write_text(store.root / "summary.csv", csv_text(study, stats))
+        write_text(store.root / "report.md", markdown(study, options, stats, failed, runner))
         notes = [] if runner == "simulator" else [f"made by the {runner}, not the simulator"]
         if options.overrides:
             notes.append("changed: " + ", ".join(f"{k} = {v:g}" for k, v in options.overrides))

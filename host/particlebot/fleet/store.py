@@ -13,12 +13,12 @@ import contextlib
 import datetime as dt
 import os
 import stat
-import tempfile
 import tomllib
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from particlebot.fileio import write_text
 from particlebot.fleet.model import (
     BaseStationRecord,
     Fleet,
@@ -263,23 +263,7 @@ def render(fleet: Fleet) -> str:
 
 def save_fleet(fleet: Fleet, path: Path) -> None:
     """Writes the whole file atomically with mode 0600."""
-    text = render(fleet)
-    directory = path.parent if str(path.parent) else Path(".")
-    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        # mkstemp creates the file 0600 already; say so, whatever the platform's default.
-        if hasattr(os, "fchmod"):
-            os.fchmod(fd, PRIVATE_MODE)
-        with os.fdopen(fd, "w", encoding="utf-8") as file:
-            file.write(text)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise
-    _sync_directory(directory)
+    write_text(path, render(fleet), mode=PRIVATE_MODE)
 
 
 def create_fleet(fleet: Fleet, path: Path, *, replace: bool = False) -> None:
@@ -319,14 +303,3 @@ def _locked(path: Path) -> Iterator[None]:
         yield
     finally:
         os.close(fd)  # releases the lock
-
-
-def _sync_directory(directory: Path) -> None:
-    # The rename itself survives a power cut only once the folder is synced.
-    if os.name == "nt":
-        return
-    fd = os.open(directory, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)

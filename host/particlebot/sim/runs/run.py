@@ -16,7 +16,6 @@ A run folder holds:
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import time
 from collections.abc import Callable
@@ -27,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from particlebot.analysis.simcsv import SimFormatError, read_published_csv
+from particlebot.fileio import atomic_path
 from particlebot.sim.runs import video
 from particlebot.sim.runs.csvlog import CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
@@ -278,9 +278,8 @@ class Run:
                 "state_phase": np.asarray(world.phase(), dtype=np.float64),
             }
         )
-        temporary = path.with_name(".writing.npz")
-        snap.save(temporary)
-        os.replace(temporary, path)
+        with atomic_path(path) as temporary:
+            snap.save(temporary)
         self._snapshot_step = world.steps
         return path
 

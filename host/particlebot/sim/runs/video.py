@@ -8,6 +8,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from particlebot.fileio import atomic_path
 from particlebot.sim.runs.pictures import Frame, View, draw_swarm, picture_size
 
 FPS = 10
@@ -33,16 +34,15 @@ def write_frame(folder: Path, index: int, frame: Frame, view: View) -> None:
     width, height = picture_size(view, FRAME_WIDTH_IN)
     # Whole pixels, an even number each way (H.264's colour subsampling wants that).
     figure = draw_swarm(frame, view, (width, round(height * 50) / 50))
-    temporary = folder / f"{index:06d}.part.png"
-    figure.savefig(temporary)
-    temporary.replace(frame_path(folder, index))
+    with atomic_path(frame_path(folder, index)) as temporary:
+        figure.savefig(temporary)
 
 
 def encode(folder: Path, output: Path, fps: int = FPS) -> Path:
     """The PNG frames of `folder`, in order, as output (.mp4: H.264; .gif)."""
     import imageio_ffmpeg
 
-    frames = sorted(p for p in folder.glob("[0-9]*.png") if not p.name.endswith(".part.png"))
+    frames = sorted(folder.glob("[0-9]*.png"))
     if not frames:
         raise VideoError(f"no frames in {folder}")
     # Frames are numbered without gaps (one every so many steps, resumed runs included), from 0
@@ -58,12 +58,14 @@ def encode(folder: Path, output: Path, fps: int = FPS) -> Path:
         command += ["-vf", palette]
     else:
         command += ["-vf", "format=yuv420p", "-c:v", "libx264", "-crf", "23"]
-    temporary = output.with_name(output.stem + ".part" + output.suffix)
-    result = subprocess.run([*command, str(temporary)], capture_output=True, text=True, check=False)
-    if result.returncode != 0:
-        temporary.unlink(missing_ok=True)
-        raise VideoError(f"ffmpeg could not write {output.name}: {result.stderr.strip()[-300:]}")
-    temporary.replace(output)
+    with atomic_path(output) as temporary:
+        result = subprocess.run(
+            [*command, str(temporary)], capture_output=True, text=True, check=False
+        )
+        if result.returncode != 0:
+            raise VideoError(
+                f"ffmpeg could not write {output.name}: {result.stderr.strip()[-300:]}"
+            )
     return output
 
 

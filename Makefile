@@ -277,7 +277,9 @@ pytest: $(VENV)/.installed native native-asan firmware firmware-faults harness
 
 test: system-deps venv check-generated lint cpp-test fuzz pytest
 
+# setup compiles the simulator's kernels first, with progress, when numba's cache lacks them.
 demo: system-deps venv native
+	$(VENV)/bin/particlebot setup
 	$(VENV)/bin/particlebot demo
 	@echo "particlebot and pio are in $(VENV)/bin: run '. $(VENV)/bin/activate' to call them by name"
 

@@ -184,6 +184,12 @@ def _study(
     except OSError as exc:
         return fail(f"cannot write results to {store.root}: {exc.strerror or exc}")
     print(_plan_line(study, options, specs), file=sys.stderr)
+    if isinstance(runner, SimulatorRunner) and args.scheduler is None:
+        # Local workers share this machine's numba cache: compiled once here, announced, instead
+        # of in every worker at once while the ETA counts it as work.
+        from particlebot.commands._kernels import prepare_kernels
+
+        prepare_kernels(stream)
     try:
         outcome = run_study(
             specs,

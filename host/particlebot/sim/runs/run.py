@@ -78,6 +78,8 @@ class Summary:
     run_folder: str
     csv: str
     snapshot: str
+    video: str = ""
+    """The film's path, once written ("" without one)."""
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -289,14 +291,20 @@ class Run:
     def finished(self) -> bool:
         return self.world.steps >= self.total_steps
 
+    @property
+    def video_path(self) -> Path:
+        return self.folder / self.scenario.output.video_name
+
     def advance(
         self,
         should_stop: Callable[[], bool] = lambda: False,
         progress: Callable[[Run, float], None] | None = None,
+        video_progress: Callable[[int, int], None] | None = None,
     ) -> Summary:
         """Steps to the end of the scenario, or until should_stop() says so between chunks;
         then writes the snapshot, pictures (and video) and summary. progress(run, wall_s) is
-        called after every chunk."""
+        called after every chunk, video_progress(frames done, frames) while the film is
+        encoded."""
         world = self.world
         began = time.monotonic()
         steps_before = world.steps
@@ -315,9 +323,15 @@ class Run:
             wall = time.monotonic() - began
             snapshot = self._snapshot()
             self.csv.close()
-        return self._finish(wall, world.steps - steps_before, snapshot)
+        return self._finish(wall, world.steps - steps_before, snapshot, video_progress)
 
-    def _finish(self, wall_s: float, steps_now: int, snapshot: Path) -> Summary:
+    def _finish(
+        self,
+        wall_s: float,
+        steps_now: int,
+        snapshot: Path,
+        video_progress: Callable[[int, int], None] | None = None,
+    ) -> Summary:
         world, folder = self.world, self.folder
         csv_path = folder / self.scenario.output.csv_name
         if self.pictures:
@@ -332,8 +346,9 @@ class Run:
                 save_track_plot(folder / TRACK_PICTURE, track, self.view)
             except SimFormatError:
                 pass  # no rows yet beyond the header: nothing to plot
+        film = ""
         if self.record_video and self.finished:
-            video.encode(folder / FRAMES, folder / self.scenario.output.video_name)
+            film = str(video.encode(folder / FRAMES, self.video_path, progress=video_progress))
         end = world.centroid()
         distance = world.light_distance()
         simulated = steps_now * world.params.dt
@@ -358,6 +373,7 @@ class Run:
             run_folder=str(folder),
             csv=str(csv_path),
             snapshot=str(snapshot),
+            video=film,
         )
         (folder / SUMMARY_FILE).write_text(json.dumps(summary.to_json(), indent=1) + "\n")
         return summary

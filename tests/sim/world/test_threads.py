@@ -60,6 +60,22 @@ def test_a_busy_machine_falls_back_to_one_thread_and_returns_when_it_is_idle_aga
     assert chosen.count(1) < 200
 
 
+def test_a_count_that_stalls_is_tried_in_short_calls_and_dropped_after_one_measurement() -> None:
+    clock = FakeClock()
+    governor = ThreadGovernor(2, clock=clock, explore_every_s=20.0)
+    assert governor.choose() == 2 and governor.steps_cap() == 1  # nothing known: one step
+    governor.record(2, 1, 1.0)  # (a world's first call is not measured)
+    assert governor.choose() == 1 and governor.steps_cap() == 1
+    governor.record(1, 1, 1.0e-3)
+    assert governor.choose() == 2
+    governor.record(2, 1, 0.15)  # 150 times slower: no second try at the start
+    assert [governor.choose() for _ in range(5)] == [1] * 5
+    assert governor.steps_cap() is None  # the count in use runs whole chunks
+    clock.now = 20.0
+    assert governor.choose() == 2  # tried again after 20 s, for 0.05 s of the other's steps
+    assert governor.steps_cap() == 50
+
+
 def test_a_tie_leaves_the_other_cores_to_the_machine() -> None:
     clock = FakeClock()
     governor = ThreadGovernor(2, clock=clock)

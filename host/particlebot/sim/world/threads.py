@@ -21,6 +21,13 @@ costs one compiled call (a quarter second in a simulate run) every 20 s, about 1
 MARGIN = 1.1
 """More threads are kept only when they are at least this much faster per step: one thread
 leaves a core to the rest of the machine, and a tie is not worth it."""
+CLEARLY_WORSE = 2.0
+"""A candidate this many times slower per step than the other after one measurement gets no
+more at the start: on a busy machine a parallel step can be a hundred times slower, and each
+more try of it costs that."""
+TRIAL_S = 0.05
+"""A try of the candidate not in use runs only as many steps as the one in use does in this
+much wall time (at least one), so a try that stalls costs one short call, not a whole chunk."""
 
 
 class ThreadGovernor:
@@ -44,7 +51,7 @@ class ThreadGovernor:
         self._times: dict[int, deque[float]] = {c: deque(maxlen=SAMPLES) for c in self.candidates}
         self._calls = 0
         self._explored_at = clock()
-        self._exploring: int | None = None
+        self._trial = False
 
     def per_step_s(self, threads: int) -> float | None:
         """The median seconds per step measured for `threads`, or None before any."""
@@ -63,22 +70,36 @@ class ThreadGovernor:
 
     def choose(self) -> int:
         """The thread count for the next call."""
-        self._exploring = None
-        for candidate in self.candidates:
-            if len(self._times[candidate]) < SAMPLES:
-                return self._alternate()
+        self._trial = False
+        short = [c for c in self.candidates if len(self._times[c]) < SAMPLES]
+        if short and not self._settled():
+            # The start: take turns, so that both candidates see the same stretch of the run.
+            pick = short[self._calls % len(short)]
+            self._trial = pick != self.best() or not self._times[pick]
+            return pick
         best = self.best()
-        if self.clock() - self._explored_at >= self.explore_every_s:
+        if len(self.candidates) > 1 and self.clock() - self._explored_at >= self.explore_every_s:
             self._explored_at = self.clock()
-            other = next(c for c in self.candidates if c != best)
-            self._exploring = other
-            return other
+            self._trial = True
+            return next(c for c in self.candidates if c != best)
         return best
 
-    def _alternate(self) -> int:
-        # The start: take turns, so that both candidates see the same stretch of the run.
-        short = [c for c in self.candidates if len(self._times[c]) < SAMPLES]
-        return short[self._calls % len(short)]
+    def _settled(self) -> bool:
+        """Whether the start can end early: one candidate clearly worse than the other."""
+        measured = [self.per_step_s(c) for c in self.candidates]
+        if len(measured) < 2 or any(m is None for m in measured):
+            return len(measured) < 2
+        fast, slow = sorted(m for m in measured if m is not None)
+        return slow > CLEARLY_WORSE * fast
+
+    def steps_cap(self) -> int | None:
+        """At most this many steps in the call choose() just chose (a try), or None."""
+        if not self._trial:
+            return None
+        known = [t for t in (self.per_step_s(c) for c in self.candidates) if t is not None]
+        if not known:
+            return 1
+        return max(1, int(TRIAL_S / min(known)))
 
     def record(self, threads: int, steps: int, seconds: float) -> None:
         """A compiled call on `threads` took `seconds` for `steps` steps."""

@@ -287,21 +287,22 @@ class World:
             return self._used_threads
         return self.thread_count or numba.get_num_threads()
 
-    def _threads_for_call(self) -> int:
+    def _threads_for_call(self) -> tuple[int, bool]:
         """Threads for the next compiled step call: 1 for a small swarm; thread_count when set;
         the caller's numba.set_num_threads when it lowered numba's count; otherwise the faster
-        of one thread and all of numba's, as measured on this machine now (threads.py)."""
+        of one thread and all of numba's, as measured on this machine now (threads.py). And
+        whether that last, measured choice made it."""
         if self._bounds.shape[0] == 2:
-            return 1
+            return 1, False
         most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set at import
         if self.thread_count is not None:
-            return max(1, min(self.thread_count, most))
+            return max(1, min(self.thread_count, most)), False
         current = numba.get_num_threads()
         if current < most:
-            return current
+            return current, False
         if self._governor is None:
             self._governor = ThreadGovernor(most)
-        return self._governor.choose()
+        return self._governor.choose(), True
 
     @property
     def steps(self) -> int:
@@ -391,6 +392,10 @@ class World:
                 block = min(block, o.every - self._steps % o.every)
             if not self._dead_done:
                 block = min(block, max(self._dead_step() - self._steps, 1))
+            threads, governed = (1, False) if self._stale else self._threads_for_call()
+            if governed and self._governor is not None:
+                # A try of the other thread count is kept short (threads.py, TRIAL_S).
+                block = min(block, self._governor.steps_cap() or block)
             rows = self._command(block)
             if self._stale:
                 rebuilds = k.advance_stale(
@@ -401,7 +406,6 @@ class World:
                     -self.params.half_width, 2 * self.params.r_max, self._prm,
                 )  # fmt: skip
             else:
-                threads = self._threads_for_call()
                 began = time.perf_counter()
                 with _numba_threads(threads):
                     self._nbr, self._listed, self._unsorted, rebuilds = k.advance(
@@ -411,7 +415,7 @@ class World:
                         self._bounds, self._pair_index, self._pair_values, self._prm, threads,
                     )  # fmt: skip
                 self._used_threads = threads
-                if self._governor is not None:
+                if governed and self._governor is not None:
                     self._governor.record(threads, rows, time.perf_counter() - began)
             self.rebuilds += rebuilds
             self._steps += rows

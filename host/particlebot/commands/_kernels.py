@@ -25,7 +25,7 @@ def prepare_kernels(stream: TextIO | None = None, force: bool = False) -> bool:
     )
     began = time.monotonic()
     bar = ProgressBar("compiling", 1, unit="stages", stream=out)
-    bar.start()
+    bar.start(show_now=False)  # its first line comes with the first stage, which gives the total
     try:
 
         def report(done: int, total: int, stage: str) -> None:

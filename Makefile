@@ -296,7 +296,9 @@ FAST_TIER := not (simavr or dask or e2e or slow)
 check: $(VENV)/.installed native cpp-test
 	$(VENV)/bin/pytest -q -m '$(FAST_TIER)' tests
 
+# setup compiles the simulator's kernels first, with progress, when numba's cache lacks them.
 demo: system-deps venv native
+	$(VENV)/bin/particlebot setup
 	$(VENV)/bin/particlebot demo
 	@echo "particlebot and pio are in $(VENV)/bin: run '. $(VENV)/bin/activate' to call them by name"
 

@@ -34,6 +34,7 @@ COMMANDS: dict[str, str] = {
     # simulation
     "simulate": "a swarm in the simulated world: scenario file or flags, run folder",
     "study": "run one of the paper's simulation studies on Dask",
+    "setup": "compile the simulator's kernels into numba's cache ahead of the first run",
     # analysis
     "track": "track the swarm on video: centroid per frame as TRACK.csv, contact sheet",
     "stats": "Table S2 for tracks and simulator runs: speeds toward the lamp, t-test, plots",

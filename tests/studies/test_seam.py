@@ -26,7 +26,8 @@ from particlebot.studies.definitions import PLACEMENTS, STUDIES, RawOptions, res
 from particlebot.studies.runners import SimulatorRunner, execute
 from particlebot.studies.spec import Rect, WorldSetup
 
-pytestmark = pytest.mark.timeout(180)
+# A hang guard far above the time on an idle machine, room for a cold numba cache on a loaded one.
+pytestmark = pytest.mark.timeout(1800)
 
 # A 10-particle swarm with a lamp 3 m ahead and a wall across its path 0.6 m ahead.
 WALLED = WorldSetup(

@@ -44,8 +44,10 @@ def test_the_issue_example_runs_in_simulated_time_under_loss(tmp_path: Path) -> 
         assert stop.stopped == (1, 2, 3, 4, 5, 6) and stop.unconfirmed == ()
         assert {p.state for p in swarm.particles()} <= {State.IDLE, State.DONE}
         log = swarm.log_path
-    # Five simulated minutes in seconds: the calls step the simulation themselves.
-    assert time.monotonic() - wall < 60
+    # The calls step the simulation themselves, unpaced: five simulated minutes take less wall
+    # time than the 300 s a run paced at real time could not go below (a few seconds idle; the
+    # bound leaves room for a machine at any load).
+    assert time.monotonic() - wall < 300
     assert log is not None
     records = [json.loads(line) for line in log.read_text().splitlines()]
     assert records[0]["kind"] == "session" and records[-1]["kind"] == "end"

@@ -5,6 +5,8 @@
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -52,8 +54,14 @@ def phases(track: WorldTrack, at: float) -> np.ndarray:
     return out
 
 
-def write_animation(log: Path, output: Path, every_s: float = FRAME_EVERY_S) -> Path:
-    """Films the log's world into output (.mp4 or .gif)."""
+def write_animation(
+    log: Path,
+    output: Path,
+    every_s: float = FRAME_EVERY_S,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> Path:
+    """Films the log's world into output (.mp4 or .gif); progress(stage, done, total) while the
+    frames are drawn (stage "drawing") and while they are encoded ("encoding")."""
     try:
         track = read_world(read_records(log).records)
     except (PlotInputError, WorldRecordError) as exc:
@@ -82,8 +90,11 @@ def write_animation(log: Path, output: Path, every_s: float = FRAME_EVERY_S) -> 
                 frame.loose, frame.objects,
             )  # fmt: skip
             write_frame(folder, index, frame, view)
+            if progress is not None:
+                progress("drawing", index + 1, len(times))
+        encoded = None if progress is None else partial(progress, "encoding")
         try:
-            return encode(folder, output, FPS)
+            return encode(folder, output, FPS, progress=encoded)
         except VideoError as exc:
             raise AnimationError(str(exc)) from None
 

@@ -17,10 +17,12 @@ from rich.text import Text
 
 from particlebot.commands._arguments import add_log_options
 from particlebot.commands._common import fail, has_terminal, opened_swarm
+from particlebot.commands._kernels import prepare_kernels
 from particlebot.commands.plot import write_plot
 from particlebot.console.worldmap import MapParticle, render_map
 from particlebot.logs.jsonl import LogError
 from particlebot.options import NON_NEGATIVE, POSITIVE, SPEED, Bounds, float_arg, int_arg
+from particlebot.progress import ProgressBar
 from particlebot.radio import RadioError
 from particlebot.radio.sizes import VIRTUAL_MAX_PARTICLES as MAX_PARTICLES
 from particlebot.swarm.api import METHODS, Swarm, method_letter, method_of
@@ -232,6 +234,10 @@ def run(args: argparse.Namespace) -> int:
         f"&speed={shown}"
     )
     method = method_letter(method_of(args.method))
+    try:
+        prepare_kernels()  # before the console or the run's clock starts
+    except KeyboardInterrupt:
+        return 130
     with tempfile.TemporaryDirectory(prefix="particlebot-demo-") as scratch:
         # The figures come from the session log: without one to keep, a scratch one.
         log_dir = Path(scratch) if args.no_log else Path(args.log_dir)
@@ -307,9 +313,23 @@ def _write_animation(log: Path) -> None:
     from particlebot.analysis.animation import AnimationError, write_animation
 
     output = log.with_suffix(".mp4")
+    bars: dict[str, ProgressBar] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:
+        # A bar per stage (drawing the frames, then encoding them): each takes minutes.
+        if stage not in bars:
+            for earlier in bars.values():
+                earlier.finish()
+            bars[stage] = ProgressBar(f"animation {output.name}: {stage}", total)
+            bars[stage].start(show_now=False)
+        bars[stage].update(done)
+
     try:
-        write_animation(log, output)
+        write_animation(log, output, progress=progress)
     except AnimationError as exc:
         print(f"particlebot: no animation: {exc}")
     else:
         print(f"Animation: {output}")
+    finally:
+        for bar in bars.values():
+            bar.finish()

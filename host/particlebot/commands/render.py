@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
-from particlebot.commands._progress import ProgressBar
+from particlebot.progress import ProgressBar
 
 if TYPE_CHECKING:
     from particlebot.analysis.synthetic import SwarmFrame

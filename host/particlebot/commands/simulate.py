@@ -17,10 +17,11 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
-from particlebot.commands._progress import ProgressBar
+from particlebot.commands._kernels import prepare_kernels
 from particlebot.devices import DEVICES
 from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds, OptionError, float_arg, int_arg
 from particlebot.options import parse_float as parse_number
+from particlebot.progress import ProgressBar
 
 if TYPE_CHECKING:
     from particlebot.sim.runs.run import Run, Summary
@@ -102,8 +103,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--threads",
         type=int_arg(Bounds(minimum=1)),
         metavar="N",
-        help="threads for swarms of 2,048 particles and more (default: one per core; give 1 to "
-        "each of several runs sharing a machine)",
+        help="threads for swarms of 2,048 particles and more (default: one, or one per core "
+        "where that measures faster on this machine as the run goes)",
     )
 
 
@@ -218,7 +219,8 @@ def run(args: argparse.Namespace) -> int:
                 )
             folder = Path(args.resume)
             check_run_folder(folder)
-            print(f"resuming {folder} (compiling or loading the kernels)", file=sys.stderr)
+            prepare_kernels()
+            print(f"resuming {folder}", file=sys.stderr)
             session = Run.resume(
                 folder,
                 record_video=args.video,
@@ -234,10 +236,9 @@ def run(args: argparse.Namespace) -> int:
             else:
                 scenario = quick_scenario(args.particles if args.particles is not None else 10)
             scenario = with_flags(scenario, args)
+            prepare_kernels()
             print(
-                f"building {scenario.name}: {scenario.swarm.particles} particles "
-                "(compiling or loading the kernels)",
-                file=sys.stderr,
+                f"building {scenario.name}: {scenario.swarm.particles} particles", file=sys.stderr
             )
             built = build_world(scenario, device=args.device)
             for note in built.notes:
@@ -246,6 +247,7 @@ def run(args: argparse.Namespace) -> int:
             session = Run.start(
                 built, folder, record_video=args.video, trajectory=_trajectory(args)
             )
+        session.world.thread_count = args.threads  # None: the world measures and chooses
         summary = _advance(session)
     except (ScenarioError, RunError, DeviceError) as exc:
         return fail(f"simulate: {exc}")
@@ -263,10 +265,11 @@ def _trajectory(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def _use_threads(threads: int) -> None:
-    """Runs the kernels on `threads` threads. Several runs that each take every core slow one
-    another down far more than their share (a 10,000-particle step waits at each parallel region
-    for a thread another process holds: on two cores, two-thread runs side by side made 20-118
-    steps/s, a one-thread run beside them ~1,250)."""
+    """Checks an explicit --threads against what numba runs here. Without one, the world picks
+    between one thread and one per core from the step times it measures (sim/world/threads.py):
+    a parallel step waits at each barrier for a thread another process may hold, so on a busy
+    machine one thread can be many times faster (on two cores, two-thread runs side by side
+    made 20-118 steps/s of a 10,000-particle swarm, a one-thread run beside them ~1,250)."""
     import numba
 
     from particlebot.sim.scenarios.scenario import ScenarioError
@@ -277,7 +280,6 @@ def _use_threads(threads: int) -> None:
             f"--threads {threads}: numba here runs at most {most} (one per core, or "
             "NUMBA_NUM_THREADS)"
         )
-    numba.set_num_threads(threads)
 
 
 def _changes(args: argparse.Namespace) -> bool:
@@ -295,23 +297,42 @@ def _advance(session: Run) -> Summary:
     label = f"simulate {session.scenario.name}"
     if begun_s > 0:
         label += f" (from {begun_s:g} s)"
-    bar = ProgressBar(label, max(1, round(remaining_s)), unit="s simulated")
+    # A line every few seconds of wall time whatever the swarm's size (the run reports after
+    # every chunk of about a quarter second, the bar's ticker in between), the ETA from the
+    # wall-clock rate since the first chunk.
+    decimals = 0 if remaining_s >= 100 else 1 if remaining_s >= 10 else 2
+    bar = ProgressBar(label, remaining_s, unit="s simulated", decimals=decimals)
 
     def progress(run: Run, wall_s: float) -> None:
         done_s = run.world.t - begun_s
         factor = done_s / wall_s if wall_s > 0 else 0.0
-        bar.update(round(done_s), f"{factor:.1f}x real time, {run.world.count} particles")
+        bar.update(done_s, f"{factor:.1f}x real time, {run.world.count} particles")
+
+    video_bar: ProgressBar | None = None
+
+    def video_progress(done: int, total: int) -> None:
+        nonlocal video_bar
+        if video_bar is None:
+            bar.finish()  # the steps are done: their line ends before the film's begins
+            video_bar = ProgressBar(f"video {session.video_path.name}", total)
+            video_bar.start()
+        video_bar.update(done)
 
     with stop_requests() as stop:
+        bar.start(show_now=False)
         try:
-            summary = session.advance(stop, progress)
+            summary = session.advance(stop, progress, video_progress=video_progress)
         finally:
             bar.finish()
+            if video_bar is not None:
+                video_bar.finish()
     return summary
 
 
 def _report(summary: Summary, as_json: bool) -> None:
     print(f"Run folder: {summary.run_folder}")
+    if summary.video:
+        print(f"Video: {summary.video}")
     print(
         f"{summary.particles} particles, {summary.t_s:g} s simulated ({summary.steps} steps): "
         f"{summary.steps_now} steps in {summary.wall_s:.1f} s, "

@@ -12,6 +12,7 @@ from typing import NoReturn, TextIO
 
 from particlebot.commands._common import fail, sigterm_as_interrupt
 from particlebot.devices import DEVICES, DeviceError
+from particlebot.fileio import write_text
 from particlebot.studies.definitions import (
     PLACEMENTS,
     STUDIES,
@@ -23,7 +24,7 @@ from particlebot.studies.definitions import (
 )
 from particlebot.studies.runners import Runner, SimulatorRunner
 from particlebot.studies.spec import RunSpec
-from particlebot.studies.store import ResultStore, write_text_atomically
+from particlebot.studies.store import ResultStore
 
 SWEEP_FLAGS = {study.sweep.flag: study.name for study in STUDIES.values() if study.sweep}
 INTERRUPTED = 130
@@ -209,6 +210,12 @@ def _study(
     except OSError as exc:
         return fail(f"cannot write results to {store.root}: {exc.strerror or exc}")
     print(_plan_line(study, options, specs), file=sys.stderr)
+    if isinstance(runner, SimulatorRunner) and args.scheduler is None:
+        # Local workers share this machine's numba cache: compiled once here, announced, instead
+        # of in every worker at once while the ETA counts it as work.
+        from particlebot.commands._kernels import prepare_kernels
+
+        prepare_kernels(stream)
     try:
         if device == "cuda" and args.scheduler is None and isinstance(runner, SimulatorRunner):
             from particlebot.studies.batched import run_batched
@@ -267,7 +274,7 @@ def _pool(study: Study, summaries: Sequence[Path], results: str | None) -> int:
     target = Path(results) / "summary.csv"
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomically(target, text)
+        write_text(target, text)
     except OSError as exc:
         return fail(f"cannot write {target}: {exc.strerror or exc}")
     print(f"Pooled {len(summaries)} summaries: {target}")
@@ -317,10 +324,8 @@ def _report(
         return 0 if not failed else 1
     try:
         store.root.mkdir(parents=True, exist_ok=True)
-        write_text_atomically(store.root / "summary.csv", csv_text(study, stats))
-        write_text_atomically(
-            store.root / "report.md", markdown(study, options, stats, failed, runner)
-        )
+        write_text(store.root / "summary.csv", csv_text(study, stats))
+        write_text(store.root / "report.md", markdown(study, options, stats, failed, runner))
         notes = [] if runner == "simulator" else [f"made by the {runner}, not the simulator"]
         if options.overrides:
             notes.append("changed: " + ", ".join(f"{k} = {v:g}" for k, v in options.overrides))

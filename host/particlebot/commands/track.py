@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from particlebot.commands._common import fail
-from particlebot.commands._progress import ProgressBar
+from particlebot.progress import ProgressBar
 
 if TYPE_CHECKING:
     from particlebot.analysis.geometry import FloorGeometry

@@ -13,7 +13,6 @@ import contextlib
 import datetime as dt
 import os
 import stat
-import tempfile
 import tomllib
 from collections.abc import Iterator, Mapping, MutableMapping
 from dataclasses import dataclass
@@ -25,6 +24,7 @@ import tomlkit.exceptions
 from tomlkit.items import Integer, Item, Trivia
 
 from particlebot.errors import ParticlebotError
+from particlebot.fileio import write_text
 from particlebot.fleet.model import (
     BaseStationRecord,
     Fleet,
@@ -347,22 +347,7 @@ def save_fleet(fleet: Fleet, path: Path) -> None:
         text = render(fleet, previous)
     except tomlkit.exceptions.TOMLKitError:  # not TOML: written afresh, as a new file is
         text = render(fleet)
-    directory = path.parent if str(path.parent) else Path(".")
-    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        # mkstemp creates the file 0600 already; say so, whatever the platform's default.
-        if hasattr(os, "fchmod"):
-            os.fchmod(fd, PRIVATE_MODE)
-        with os.fdopen(fd, "w", encoding="utf-8") as file:
-            file.write(text)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise
-    _sync_directory(directory)
+    write_text(path, text, mode=PRIVATE_MODE)
 
 
 def create_fleet(fleet: Fleet, path: Path, *, replace: bool = False) -> None:
@@ -402,14 +387,3 @@ def _locked(path: Path) -> Iterator[None]:
         yield
     finally:
         os.close(fd)  # releases the lock
-
-
-def _sync_directory(directory: Path) -> None:
-    # The rename itself survives a power cut only once the folder is synced.
-    if os.name == "nt":
-        return
-    fd = os.open(directory, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)

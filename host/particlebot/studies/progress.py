@@ -3,27 +3,22 @@ going count by how far they are), elapsed time and an ETA weighted by cost."""
 
 from __future__ import annotations
 
-import sys
-import threading
 import time
 from collections.abc import Callable
 from typing import TextIO
 
-
-def clock_text(seconds: float) -> str:
-    seconds = max(0, round(seconds))
-    hours, rest = divmod(seconds, 3600)
-    return f"{hours}:{rest // 60:02d}:{rest % 60:02d}"
+from particlebot.progress import ProgressLine, bar_text, clock_text
 
 
-class Progress:
+class Progress(ProgressLine):
     """Counts runs and estimates the time left from their cost (particle-steps), not their number:
     a study mixes runs of 10 and 10,000 particles, and starts the dear ones first. A run that is
     still going counts by the share of its steps it reported (running()), so a study of a few long
     runs has an ETA before the first one ends.
 
     On a terminal it redraws one line, every second while runs are out; otherwise (a log, a
-    batch job) it prints a line every report_every_s seconds, and always the last.
+    batch job) it prints a line every report_every_s seconds, and always the last
+    (particlebot.progress decides when).
     """
 
     def __init__(
@@ -36,6 +31,7 @@ class Progress:
         clock: Callable[[], float] = time.monotonic,
         report_every_s: float = 30.0,
     ) -> None:
+        super().__init__(stream, clock, report_every_s)
         self.label = label
         self.total = total
         self.done = done
@@ -47,27 +43,11 @@ class Progress:
         """run id -> (its cost, the share done when this invocation first heard of it, the share
         done now): a resumed run's earlier share is neither work done now nor work left."""
         self.ended: set[str] = set()
-        self.stream = stream if stream is not None else sys.stderr
-        self.clock = clock
-        self.started = clock()
         self.last_news = self.started
         """When the work done last changed (a report or a result)."""
-        self.report_every_s = report_every_s
-        self.last_report = -float("inf")
-        self.live = self.stream.isatty()
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._ticker: threading.Thread | None = None
 
-    def start(self) -> None:
-        """Shows the line now and keeps the clock on it moving between runs."""
-        self.show(force=True)
-        self._ticker = threading.Thread(target=self._tick, name="study-progress", daemon=True)
-        self._ticker.start()
-
-    def _tick(self) -> None:
-        while not self._stop.wait(1.0 if self.live else self.report_every_s):
-            self.show()
+    def complete(self) -> bool:
+        return self.done == self.total
 
     def running(self, run_id: str, cost: float, share_at_start: float, share_now: float) -> None:
         """A run that is going reported how far it is (shares of its steps, 0 to 1)."""
@@ -115,35 +95,14 @@ class Progress:
         return 1.0 - self._work()[1] / self.cost_total
 
     def line(self) -> str:
-        width = 24
         share = self.share_done()
-        filled = min(width, int(width * share))
         eta = self.eta_s()
         parts = [
             f"{self.label}: {self.done}/{self.total} runs",
-            f"[{'#' * filled}{'.' * (width - filled)}] {100 * share:3.0f} %",
+            f"{bar_text(share)} {100 * share:3.0f} %",
         ]
         if self.failed:
             parts.append(f"{self.failed} failed")
         parts.append(f"elapsed {clock_text(self.clock() - self.started)}")
         parts.append("ETA " + ("--" if eta is None else clock_text(eta)))
         return "  ".join(parts)
-
-    def show(self, force: bool = False) -> None:
-        with self._lock:
-            now = self.clock()
-            if self.live:
-                self.stream.write("\r" + self.line() + "\x1b[K")
-            elif force or self.done == self.total or now - self.last_report >= self.report_every_s:
-                self.stream.write(self.line() + "\n")
-                self.last_report = now
-            self.stream.flush()
-
-    def close(self) -> None:
-        self._stop.set()
-        if self._ticker is not None:
-            self._ticker.join()
-        if self.live:
-            with self._lock:
-                self.stream.write("\n")
-                self.stream.flush()

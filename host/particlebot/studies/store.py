@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from particlebot.fileio import write_text
 from particlebot.studies.spec import RunRecord, RunSpec
 
 
@@ -84,19 +83,5 @@ class ResultStore:
 
 
 def write_json_atomically(path: Path, data: dict[str, Any]) -> None:
-    """Whole or not at all: written to a temporary file in the same folder, flushed to disk, then
-    renamed over the target (rename is atomic within a file system)."""
-    write_text_atomically(path, json.dumps(data, indent=1) + "\n")
-
-
-def write_text_atomically(path: Path, text: str) -> None:
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w") as stream:
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    """Whole or not at all (particlebot.fileio): a result a crash cut short never looks done."""
+    write_text(path, json.dumps(data, indent=1) + "\n")

@@ -57,13 +57,12 @@ def test_threads_sets_how_many_threads_a_large_swarm_steps_on(
 ) -> None:
     before = numba.get_num_threads()  # numba's count is per thread: pytest's own, here
     argv = ["simulate", "--particles", str(PARALLEL_FROM), "--duration", "0.5"]
-    try:
-        assert main([*argv, "--threads", "1", "-o", str(tmp_path / "one"), "--json"]) == 0
-    finally:
-        numba.set_num_threads(before)
+    assert main([*argv, "--threads", "1", "-o", str(tmp_path / "one"), "--json"]) == 0
     assert last_json(capsys.readouterr().out)["threads"] == 1
+    assert numba.get_num_threads() == before  # the override does not outlive its run
     assert main([*argv, "-o", str(tmp_path / "default"), "--json"]) == 0
-    assert last_json(capsys.readouterr().out)["threads"] == before
+    # Without --threads the world picks one thread or all from the step times it measures.
+    assert last_json(capsys.readouterr().out)["threads"] in {1, before}
 
 
 def test_a_published_cfg_runs_as_is(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

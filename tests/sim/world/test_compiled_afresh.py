@@ -11,8 +11,15 @@ from pathlib import Path
 
 import pytest
 
-# Each test compiles the kernels in fresh processes: minutes, so in the slow tier.
-pytestmark = pytest.mark.slow
+SUBPROCESS_DEADLINE_S = 1800.0
+"""Each script compiles the kernels from an empty cache: about 2.5 min on an idle 2-core machine,
+up to five or ten times that on a machine at load 5-10. The deadline only catches a hang, so it
+sits an order of magnitude above the typical time; a failure to compile fails at once."""
+
+# Each test compiles the kernels in fresh processes: minutes, so in the slow tier. The tests' own
+# limit replaces pytest-timeout's 300 s default (which a loaded machine reaches):
+# three scripts back to back, each with its deadline.
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(3 * SUBPROCESS_DEADLINE_S + 60)]
 
 # The end of a script that ran `world`: prints a digest of every particle's position, velocity
 # and radius.
@@ -84,10 +91,13 @@ def cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def _run(cache: Path, script: str = _RUN, *args: str) -> str:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    done = subprocess.run(
-        [sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
-        timeout=600,
-    )  # fmt: skip
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", script, *args], env=env, capture_output=True, text=True,
+            timeout=SUBPROCESS_DEADLINE_S,
+        )  # fmt: skip
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"the script did not end in {SUBPROCESS_DEADLINE_S:.0f} s: a hang")
     assert done.returncode == 0, f"exit {done.returncode}: {done.stderr[-2000:]}"
     return done.stdout.strip().splitlines()[-1]
 

@@ -52,6 +52,8 @@ def test_pairs_from_the_grid_equal_pairs_from_the_lists_bit_for_bit() -> None:
         body, flags = sums[f"lists {block}"]
         assert np.array_equal(body, sums[f"grid {block}"][0]), block
         assert np.array_equal(flags, sums[f"grid {block}"][1]), block
+    # Blocks of 37 pairs add a particle's dozen-odd forces in another order than whole blocks:
+    # a few ulps apart (rtol 1e-12 is a thousand ulps), 1e-9 N absolute for sums near zero.
     assert np.allclose(sums["grid 37"][0], body, rtol=1e-12, atol=1e-9)
     assert (body[k.B_FR] > 0).sum() > 100 and (body[k.B_FA] > 0).sum() > 100
     assert flags[k.F_JOINED].any()  # free particles touching the robot
@@ -108,6 +110,11 @@ def test_the_parallel_path_follows_the_plain_numpy_transcription_too(
                   params=PhysicsParams(skin=skin))  # fmt: skip
     assert world._bounds.shape[0] > 2
     worst, reference = lockstep(world, controller, steps=600)
+    # Tolerance: the kernels contract a*b+c into fused multiply-adds where the CPU has them and
+    # re-associate sums (fastmath contract/reassoc), numpy does neither: each step differs by a
+    # few ulps of a position (1e-16 m scale), and a 10-particle cluster's contacts do not amplify
+    # that in 600 steps (4e-16 m apart at the end on an AVX2 CPU). 1e-9 m catches a wrong law or
+    # a missed pair (either moves a particle by micrometres within a few steps) on any CPU.
     assert np.abs(world.radii() - reference.r).max() < 1e-9
     assert worst < 1e-9
     assert world.rebuilds > 1 and np.abs(world.state().vx).max() > 0  # and something happened

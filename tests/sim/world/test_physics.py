@@ -25,6 +25,8 @@ def test_overlapping_pair_is_pushed_apart_along_the_line_of_centres_by_the_sprin
     state = world.state()
     # One step of unit mass at rest: v = F dt, F = k x overlap, along -n on the first disc.
     speed = params.spring * overlap * params.dt
+    # A handful of floating-point operations each way: a few ulps apart, 1e-12 relative is a
+    # thousand ulps on any CPU (with or without fused multiply-adds).
     assert state.vx == pytest.approx([-speed * math.cos(angle), speed * math.cos(angle)], 1e-12)
     assert state.vy == pytest.approx([-speed * math.sin(angle), speed * math.sin(angle)], 1e-12)
 
@@ -36,6 +38,8 @@ def test_pair_forces_conserve_momentum_in_an_actuating_frictionless_swarm() -> N
     world.run(20.0)
     state = world.state()
     assert np.abs(state.vx).sum() > 0.1  # it moved
+    # Pair forces cancel exactly; what is left is rounding of 30 velocities (~0.01 m/s) over
+    # 2,000 steps, ~N eps |v| each step: under 1e-13 m/s however the sums are ordered.
     assert abs(state.vx.sum()) < 1e-10
     assert abs(state.vy.sum()) < 1e-10
 

@@ -55,6 +55,7 @@ def test_re_listing_every_step_sees_every_pair_as_the_exact_search_does() -> Non
     exact.run(1.0)
     every_step.run(1.0)
     assert every_step.rebuilds == 100
+    # The same pairs summed in another order: ulps per step, far below 1e-9 m after 100 steps.
     np.testing.assert_allclose(every_step.positions(), exact.positions(), rtol=0, atol=1e-9)
 
 

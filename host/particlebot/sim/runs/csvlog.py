@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import io
 import math
-import os
 from pathlib import Path
 from typing import TextIO
 
 import numpy as np
 
+from particlebot.fileio import write_text
 from particlebot.sim.world.bodies import BodyState
 
 
@@ -97,7 +97,4 @@ def keep_rows_through(path: Path, t_s: float) -> None:
         if not math.isfinite(t) or t > t_s + 1e-6:
             break
         kept.append(line)
-    temporary = path.with_name(path.name + ".part")
-    with temporary.open("w", encoding="utf-8", newline="") as stream:
-        stream.write("\n".join(kept) + "\n")
-    os.replace(temporary, path)
+    write_text(path, "\n".join(kept) + "\n", newline="")

@@ -18,7 +18,6 @@ A run folder holds:
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import time
 from collections.abc import Callable, Sequence
@@ -29,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from particlebot.errors import ParticlebotError
+from particlebot.fileio import atomic_path
 from particlebot.sim.runs import video
 from particlebot.sim.runs.csvlog import CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
@@ -83,6 +83,8 @@ class Summary:
     run_folder: str
     csv: str
     snapshot: str
+    video: str = ""
+    """The film's path, once written ("" without one)."""
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -306,9 +308,8 @@ class Run:
                 "state_phase": np.asarray(world.phase(), dtype=np.float64),
             }
         )
-        temporary = path.with_name(".writing.npz")
-        snap.save(temporary)
-        os.replace(temporary, path)
+        with atomic_path(path) as temporary:
+            snap.save(temporary)
         self._snapshot_step = world.steps
         return path
 
@@ -318,14 +319,20 @@ class Run:
     def finished(self) -> bool:
         return self.world.steps >= self.total_steps
 
+    @property
+    def video_path(self) -> Path:
+        return self.folder / self.scenario.output.video_name
+
     def advance(
         self,
         should_stop: Callable[[], bool] = lambda: False,
         progress: Callable[[Run, float], None] | None = None,
+        video_progress: Callable[[int, int], None] | None = None,
     ) -> Summary:
         """Steps to the end of the scenario, or until should_stop() says so between chunks;
         then writes the snapshot, pictures (and video) and summary. progress(run, wall_s) is
-        called after every chunk."""
+        called after every chunk, video_progress(frames done, frames) while the film is
+        encoded."""
         world = self.world
         began = time.monotonic()
         steps_before = world.steps
@@ -346,9 +353,15 @@ class Run:
             self.csv.close()
             for log in self.trajectories:
                 log.close()
-        return self._finish(wall, world.steps - steps_before, snapshot)
+        return self._finish(wall, world.steps - steps_before, snapshot, video_progress)
 
-    def _finish(self, wall_s: float, steps_now: int, snapshot: Path) -> Summary:
+    def _finish(
+        self,
+        wall_s: float,
+        steps_now: int,
+        snapshot: Path,
+        video_progress: Callable[[int, int], None] | None = None,
+    ) -> Summary:
         world, folder = self.world, self.folder
         csv_path = folder / self.scenario.output.csv_name
         if self.pictures:
@@ -363,8 +376,9 @@ class Run:
                 save_track_plot(folder / TRACK_PICTURE, track, self.view)
             except SimFormatError:
                 pass  # no rows yet beyond the header: nothing to plot
+        film = ""
         if self.record_video and self.finished:
-            video.encode(folder / FRAMES, folder / self.scenario.output.video_name)
+            film = str(video.encode(folder / FRAMES, self.video_path, progress=video_progress))
         end = world.centroid()
         distance = world.light_distance()
         simulated = steps_now * world.params.dt
@@ -389,6 +403,7 @@ class Run:
             run_folder=str(folder),
             csv=str(csv_path),
             snapshot=str(snapshot),
+            video=film,
         )
         (folder / SUMMARY_FILE).write_text(json.dumps(summary.to_json(), indent=1) + "\n")
         return summary

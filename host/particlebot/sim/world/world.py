@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 import pickle
-from collections.abc import Callable, Sequence
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -23,6 +25,7 @@ from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
 from particlebot.sim.world.light import Lamp, LightField, ShadowMode
 from particlebot.sim.world.params import NeighbourSearch, PhysicsParams
+from particlebot.sim.world.threads import ThreadGovernor
 
 if TYPE_CHECKING:
     from particlebot.sim.world.cuda.swarms import DeviceSwarms
@@ -44,6 +47,20 @@ launches, so the longer the better (400 steps of a 10,000-particle swarm)."""
 TOUCH_GAP = 0.9e-3
 """A free particle joins the robot when its gap to a member closes below this (m): the magnets'
 clamp gap, where they lock."""
+
+
+@contextmanager
+def _numba_threads(threads: int) -> Iterator[None]:
+    """numba's thread count for this (calling) thread set to `threads` for a block."""
+    previous = numba.get_num_threads()
+    if previous == threads:
+        yield
+        return
+    numba.set_num_threads(threads)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(previous)
 
 
 @dataclass
@@ -217,6 +234,10 @@ class World:
         p = self.params
         chunks = 1 if n < PARALLEL_FROM else CHUNKS
         self._bounds = np.linspace(0, n, chunks + 1).astype(np.int64)
+        self.thread_count: int | None = getattr(self, "thread_count", None)
+        """Threads for the parallel step, or None: chosen from measured step times (threads.py)."""
+        self._governor: ThreadGovernor | None = None
+        self._used_threads: int | None = None
         self._acc = np.zeros((chunks, len(self.objects), k.ACC_COLS))
         self._pair_index = np.zeros((chunks, k.PAIR_INDEX_ROWS, 2 * k.PAIR_BLOCK), dtype=np.int64)
         self._pair_values = np.zeros((chunks, k.PAIR_VALUE_ROWS, k.PAIR_BLOCK))
@@ -304,9 +325,30 @@ class World:
 
     @property
     def threads(self) -> int:
-        """Threads a step of this world runs on now, from the calling thread: numba's count for
-        it (numba.set_num_threads), or 1 for a swarm below PARALLEL_FROM."""
-        return 1 if self._bounds.shape[0] == 2 else numba.get_num_threads()
+        """Threads this world's last step ran on (1 for a swarm below PARALLEL_FROM); before
+        any, what the next would start on."""
+        if self._bounds.shape[0] == 2:
+            return 1
+        if self._used_threads is not None:
+            return self._used_threads
+        return self.thread_count or numba.get_num_threads()
+
+    def _threads_for_call(self) -> tuple[int, bool]:
+        """Threads for the next compiled step call: 1 for a small swarm; thread_count when set;
+        the caller's numba.set_num_threads when it lowered numba's count; otherwise the faster
+        of one thread and all of numba's, as measured on this machine now (threads.py). And
+        whether that last, measured choice made it."""
+        if self._bounds.shape[0] == 2:
+            return 1, False
+        most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set at import
+        if self.thread_count is not None:
+            return max(1, min(self.thread_count, most)), False
+        current = numba.get_num_threads()
+        if current < most:
+            return current, False
+        if self._governor is None:
+            self._governor = ThreadGovernor(most)
+        return self._governor.choose(), True
 
     @property
     def steps(self) -> int:
@@ -392,7 +434,12 @@ class World:
             raise RuntimeError("this world is one of an ensemble's: step the Ensemble")
         end = self._steps + n
         while self._steps < end:
-            rows = self._begin_block(end)
+            threads, governed = (
+                (1, False) if self._stale or self._gpu is not None else self._threads_for_call()
+            )
+            # A try of the other thread count is kept short (threads.py, TRIAL_S).
+            cap = self._governor.steps_cap() if governed and self._governor is not None else None
+            rows = self._begin_block(end, cap)
             if self._gpu is not None:
                 self._gpu.advance(rows, self._targets, (self._cycle,))
                 rebuilds = rows  # (the GPU bins the particles afresh at every step)
@@ -405,17 +452,22 @@ class World:
                     -self.params.half_width, 2 * self.params.r_max, self._prm,
                 )  # fmt: skip
             else:
-                self._nbr, self._listed, self._unsorted, rebuilds = k.advance(
-                    rows, self._targets, self._ext, self._pos, self._ref, self._vel, self._body,
-                    self._flags, self._nbr, self._ncount, self._listed, self._unsorted,
-                    self._rects, self._circles, self._objects, self._acc,
-                    self._bounds, self._pair_index, self._pair_values, self._prm, self.threads,
-                )  # fmt: skip
+                began = time.perf_counter()
+                with _numba_threads(threads):
+                    self._nbr, self._listed, self._unsorted, rebuilds = k.advance(
+                        rows, self._targets, self._ext, self._pos, self._ref, self._vel,
+                        self._body, self._flags, self._nbr, self._ncount, self._listed,
+                        self._unsorted, self._rects, self._circles, self._objects, self._acc,
+                        self._bounds, self._pair_index, self._pair_values, self._prm, threads,
+                    )  # fmt: skip
+                self._used_threads = threads
+                if governed and self._governor is not None:
+                    self._governor.record(threads, rows, time.perf_counter() - began)
             self._end_block(rows, rebuilds)
 
-    def _begin_block(self, end: int) -> int:
-        """Kills the dead when due and commands the next block of steps (before `end`); returns
-        how many steps the targets buffer holds."""
+    def _begin_block(self, end: int, cap: int | None = None) -> int:
+        """Kills the dead when due and commands the next block of steps (before `end`, and at
+        most `cap` when given); returns how many steps the targets buffer holds."""
         if not self._dead_done and self._steps >= self._dead_step():
             self._kill()
         block = end - self._steps
@@ -423,6 +475,8 @@ class World:
             block = min(block, o.every - self._steps % o.every)
         if not self._dead_done:
             block = min(block, max(self._dead_step() - self._steps, 1))
+        if cap:
+            block = min(block, cap)
         return self._command(block)
 
     def _end_block(self, rows: int, rebuilds: int) -> None:

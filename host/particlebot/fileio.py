@@ -1,0 +1,94 @@
+"""Files written whole or not at all: every output the package writes goes through a temporary
+name in the target's own folder, is flushed to disk, and only then renamed over the target."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+# Why the same folder: rename is atomic only within one file system, and a reader (a resume, a
+# study's store, a person's file manager) sees either the old file or the new one, never half.
+# Why fsync before the rename: after a power cut the rename could otherwise reach the disk before
+# the data, leaving an empty file under the good name. The temporary name starts with a dot and
+# ends in ".tmp" plus the target's own suffix: globs for outputs ("step-*.npz", "[0-9]*.png") do
+# not see it, and writers that pick a format from the suffix (numpy's .npz, ffmpeg, matplotlib)
+# write the target's format.
+
+
+def temporary_beside(path: Path) -> Path:
+    """A new, empty file next to `path` whose name no output glob matches (made 0600)."""
+    folder = path.parent if str(path.parent) else Path(".")
+    handle, name = tempfile.mkstemp(
+        dir=folder, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}"
+    )
+    os.close(handle)
+    return Path(name)
+
+
+def _sync_folder(folder: Path) -> None:
+    """Makes a rename inside `folder` durable (a no-op where folders cannot be opened)."""
+    with contextlib.suppress(OSError):
+        handle = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(handle)
+        finally:
+            os.close(handle)
+
+
+def _commit(temporary: Path, path: Path, mode: int | None) -> None:
+    if mode is not None:
+        os.chmod(temporary, mode)
+    else:
+        # mkstemp makes files 0600; an ordinary output gets the mode a plain open() would give.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temporary, 0o666 & ~umask)
+    os.replace(temporary, path)
+    _sync_folder(path.parent if str(path.parent) else Path("."))
+
+
+@contextlib.contextmanager
+def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
+    """Yields a temporary path beside `path` for a writer that wants a file name (np.savez,
+    ffmpeg, savefig); when the block ends without an exception, the file is synced and renamed
+    over `path`, else removed. `mode` sets its permissions (default: as open() would)."""
+    temporary = temporary_beside(path)
+    try:
+        yield temporary
+        with open(temporary, "rb+") as stream:
+            os.fsync(stream.fileno())
+        _commit(temporary, path, mode)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_open(
+    path: Path, *, mode: int | None = None, newline: str | None = None
+) -> Iterator[IO[str]]:
+    """A text file (UTF-8) open for writing that replaces `path` when the block ends without an
+    exception, and leaves `path` as it was otherwise."""
+    with (
+        atomic_path(path, mode) as temporary,
+        temporary.open("w", encoding="utf-8", newline=newline) as stream,
+    ):
+        yield stream
+
+
+def write_text(
+    path: Path, text: str, *, mode: int | None = None, newline: str | None = None
+) -> None:
+    """`path` holds `text` (UTF-8), whole, or keeps what it held."""
+    with atomic_open(path, mode=mode, newline=newline) as stream:
+        stream.write(text)
+
+
+def write_bytes(path: Path, data: bytes, *, mode: int | None = None) -> None:
+    """`path` holds `data`, whole, or keeps what it held."""
+    with atomic_path(path, mode) as temporary:
+        temporary.write_bytes(data)

@@ -8,13 +8,13 @@ ParticlebotError
  +-- GeometryError (ValueError)           analysis.geometry
  +-- SourceError (ValueError)             analysis.sources
  +-- TrackFormatError (ValueError)        analysis.trackfile
- +-- VideoError (ValueError)              analysis.video
  +-- CalibrationError (ValueError)        calibration.photocells
  +-- NobodyAnswers                        calibration.prompts
  +-- Quit                                 calibration.prompts
  +-- ReadingsError (ValueError)           calibration.readings
  +-- UsageError (ValueError)              commands.flash
  +-- CommandError (ValueError)            console.commands
+ +-- DeviceError (ValueError)             devices
  +-- ExperimentFileError                  experiments.plan
  +-- ExperimentStopped                    experiments.runner
  +-- NativeLibraryError (OSError)         firmware.native
@@ -43,6 +43,7 @@ ParticlebotError
  +-- BootError (RuntimeError)             sim.particles.emulated.boot
  |    +-- EmulatorMissingError            sim.particles.emulated.boot
  +-- HarnessError (RuntimeError)          sim.particles.emulated.harness
+ +-- HarnessBuildError (RuntimeError)     sim.particles.emulated.harness
  +-- RunError (ValueError)                sim.runs.run
  +-- SimFormatError (ValueError)          sim.runs.simcsv
  +-- VideoError (RuntimeError)            sim.runs.video
@@ -51,9 +52,11 @@ ParticlebotError
  +-- WorldRecordError (ValueError)        sim.swarm.records
  +-- StudyOptionError (ValueError)        studies.definitions
  +-- ClusterError (RuntimeError)          studies.engine
+ +-- PoolingError (ValueError)            studies.pooling
  +-- MeasureError (ValueError)            studies.measures
  +-- SetupError (ValueError)              studies.seam
  +-- IdInUseError (ValueError)            swarm.model
+ +-- VideoError (ValueError)              videowriter
  +-- SwarmError                           swarm.results
       +-- IdInUse                         swarm.results
       +-- NotConfirmed                    swarm.results

@@ -45,7 +45,7 @@ def default_elf(faults: bool = False) -> Path:
     return resources.firmware_image(faults=faults, suffix=".elf")
 
 
-class HarnessBuildError(RuntimeError):
+class HarnessBuildError(ParticlebotError, RuntimeError):
     """The harness is missing and cannot be built here; the message is one line saying why."""
 
 

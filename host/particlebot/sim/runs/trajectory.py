@@ -18,13 +18,13 @@ Units are SI (m, m/s), as everywhere in the simulator.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, TextIO
 
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.fileio import atomic_path, write_text
 from particlebot.sim.world.world import World
 
 if TYPE_CHECKING:
@@ -105,11 +105,12 @@ class GsdLog:
             steps = [int(frame.configuration.step) for frame in old]
             keep = sum(1 for step in steps if step <= up_to_step)
             if keep < len(steps):
-                temporary = path.with_name(path.name + ".part")
-                with gsd.hoomd.open(str(temporary), "w") as new:
+                with (
+                    atomic_path(path) as temporary,
+                    gsd.hoomd.open(str(temporary), "w") as new,
+                ):
                     for index in range(keep):
                         new.append(old[index])
-                os.replace(temporary, path)
         return cls(path, gsd.hoomd.open(str(path), "a"))
 
     def write(self, world: World) -> None:
@@ -184,9 +185,7 @@ class XyzLog:
                 break
             kept += frame
             index += 2 + count
-        temporary = path.with_name(path.name + ".part")
-        temporary.write_text("".join(kept), encoding="utf-8")
-        os.replace(temporary, path)
+        write_text(path, "".join(kept))
         return cls(path, path.open("a", encoding="utf-8"))
 
     def write(self, world: World) -> None:

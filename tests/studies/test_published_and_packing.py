@@ -78,6 +78,7 @@ def test_small_packings_reach_the_known_optima(n: int, optimum: float) -> None:
     assert compute_densest_packing(n) == pytest.approx(optimum, abs=2e-4)
 
 
+@pytest.mark.slow
 def test_the_generated_table_holds_what_the_computation_gives() -> None:
     assert DPD_DIAMETERS[10] == compute_densest_packing(10)
     assert densest_packing_diameters(10) == DPD_DIAMETERS[10]

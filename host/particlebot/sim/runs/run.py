@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from particlebot.analysis.simcsv import SimFormatError, read_published_csv
+from particlebot.errors import ParticlebotError
 from particlebot.sim.runs import video
 from particlebot.sim.runs.csvlog import CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
@@ -49,8 +50,12 @@ CHUNK_WALL_S = 0.25
 """Steps are taken in chunks of about this much wall time: progress and a stop act between."""
 
 
-class RunError(ValueError):
+class RunError(ParticlebotError, ValueError):
     """A run folder that cannot be used: taken, or not a run to resume."""
+
+
+class BlownUpError(RunError):
+    """The world's state stopped being finite numbers: the run stops at the last good snapshot."""
 
 
 @dataclass
@@ -302,11 +307,19 @@ class Run:
         began = time.monotonic()
         steps_before = world.steps
         chunk = 1
+        blown_up = False
         try:
             while not self.finished and not should_stop():
                 tick = time.monotonic()
                 world.step(min(chunk, self.total_steps - world.steps))
                 took = time.monotonic() - tick
+                if not world.finite():
+                    blown_up = True  # its snapshot would hold NaN: the last good one stays
+                    raise BlownUpError(
+                        f"the world's state stopped being finite numbers by {world.t:g} s "
+                        f"(step {world.steps}): the physics is unstable for these settings; "
+                        f"{self.folder} keeps its last good snapshot"
+                    )
                 # Aim for chunks of CHUNK_WALL_S: progress stays live, a stop acts soon.
                 rate = chunk / max(took, 1e-6)
                 chunk = max(1, min(int(rate * CHUNK_WALL_S), 4 * chunk))
@@ -314,8 +327,9 @@ class Run:
                     progress(self, time.monotonic() - began)
         finally:
             wall = time.monotonic() - began
-            snapshot = self._snapshot()
+            snapshot = None if blown_up else self._snapshot()
             self.csv.close()
+        assert snapshot is not None
         return self._finish(wall, world.steps - steps_before, snapshot)
 
     def _finish(self, wall_s: float, steps_now: int, snapshot: Path) -> Summary:

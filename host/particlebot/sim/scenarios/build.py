@@ -109,7 +109,8 @@ def build_world(scenario: Scenario, controller: Controller | None = None) -> Bui
     """The World a scenario describes, with its controller bound (`controller`, when given,
     instead of the scenario's: the swarm of firmware particles drives the world with theirs);
     ScenarioError (one line that names the file, line and key) when the scenario cannot be put
-    down as written."""
+    down as written; TooBigError when it would not fit in memory."""
+    scenario.check_feasible()
     params = scenario.physics
     placement = place_swarm(scenario)
     xy = placement.xy

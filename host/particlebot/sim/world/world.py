@@ -302,6 +302,16 @@ class World:
             objects=self._objects[:, [k.O_X, k.O_Y, k.O_VX, k.O_VY, k.O_R]].copy(),
         )
 
+    def finite(self) -> bool:
+        """Whether every position, velocity and radius is a finite number. Not checked inside
+        the step loop (it costs a pass over the swarm); a caller checks it now and then, and
+        stops a world that has blown up before a NaN reaches the grid's cell arithmetic."""
+        return bool(
+            np.isfinite(self._pos).all()
+            and np.isfinite(self._vel).all()
+            and np.isfinite(self._body[k.B_R]).all()
+        )
+
     def centroid(self, members_only: bool = False) -> tuple[float, float]:
         """Mean centre of every body, passive objects included, as the published CSV has it;
         members_only: of the robot's particles alone (no free, detached or object bodies)."""

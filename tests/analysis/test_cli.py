@@ -123,6 +123,7 @@ def test_stats_errors_get_one_line(tmp_path: Path, capsys: pytest.CaptureFixture
         (["stats", str(tmp_path), "--interval-s", "0"], "--interval-s: must be a number > 0"),
         (["stats", str(tmp_path), "--lamp", "1"], "--lamp must look like"),
     ]:
+        code: object
         try:
             code = main(argv)
         except SystemExit as exc:  # argparse refuses an option's value itself

@@ -196,7 +196,13 @@ def stop_requests() -> Iterator[Callable[[], bool]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from particlebot.sim.runs.run import Run, RunError, check_run_folder, default_folder
+    from particlebot.sim.runs.run import (
+        Run,
+        RunError,
+        check_run_folder,
+        claim_run_folder,
+        default_folder,
+    )
     from particlebot.sim.runs.video import VideoError
     from particlebot.sim.scenarios.scenario import ScenarioError
 
@@ -211,8 +217,9 @@ def run(args: argparse.Namespace) -> int:
                 )
             folder = Path(args.resume)
             check_run_folder(folder)
-            print(f"resuming {folder} (compiling or loading the kernels)", file=sys.stderr)
             session = Run.resume(folder, record_video=args.video, duration_s=args.duration)
+            for note in session.notes:
+                print(f"note: {note}", file=sys.stderr)
         else:
             from particlebot.sim.scenarios.build import build_world
 
@@ -221,17 +228,24 @@ def run(args: argparse.Namespace) -> int:
             else:
                 scenario = quick_scenario(args.particles if args.particles is not None else 10)
             scenario = with_flags(scenario, args)
-            scenario.check_feasible()  # before the kernels load: a refusal is one line
-            print(
-                f"building {scenario.name}: {scenario.swarm.particles} particles "
-                "(compiling or loading the kernels)",
-                file=sys.stderr,
-            )
-            built = build_world(scenario)
-            for note in built.notes:
-                print(f"note: {note}", file=sys.stderr)
+            # What can be refused is, before the kernels load: a refusal is one line.
+            scenario.check_feasible()
             folder = Path(args.output) if args.output else default_folder(scenario.name)
-            session = Run.start(built, folder, record_video=args.video)
+            created = claim_run_folder(folder)
+            try:
+                print(
+                    f"building {scenario.name}: {scenario.swarm.particles} particles "
+                    "(compiling or loading the kernels)",
+                    file=sys.stderr,
+                )
+                built = build_world(scenario)
+                for note in built.notes:
+                    print(f"note: {note}", file=sys.stderr)
+                session = Run.start(built, folder, record_video=args.video)
+            except BaseException:
+                if created and folder.is_dir() and not any(folder.iterdir()):
+                    folder.rmdir()  # nothing of this run was written: no folder either
+                raise
         summary = _advance(session)
     except (ScenarioError, RunError) as exc:
         return fail(f"simulate: {exc}")

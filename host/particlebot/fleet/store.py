@@ -265,7 +265,10 @@ def save_fleet(fleet: Fleet, path: Path) -> None:
     """Writes the whole file atomically with mode 0600."""
     text = render(fleet)
     directory = path.parent if str(path.parent) else Path(".")
-    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:  # a file where the folder should be, read-only, /proc
+        raise FleetFileError(f"cannot write {path}: {exc.strerror or exc}") from None
     try:
         # mkstemp creates the file 0600 already; say so, whatever the platform's default.
         if hasattr(os, "fchmod"):

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import copy
 import math
-import pickle
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numba
@@ -18,6 +18,7 @@ from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
 from particlebot.sim.world.light import Lamp, LightField, ShadowMode
 from particlebot.sim.world.params import NeighbourSearch, PhysicsParams
+from particlebot.sim.world.snapshot import Snapshot
 
 Precision = Literal["float64", "float32"]
 Observer = Callable[["World"], None]
@@ -39,30 +40,6 @@ clamp gap, where they lock."""
 class _Observation:
     callback: Observer
     every: int
-
-
-@dataclass
-class Snapshot:
-    """Everything a World needs to continue exactly where it was: its setup, every array in the
-    kernels' order, the random generator and the pickled controller. `save`/`load` keep it in
-    a compressed .npz (no pickle of numpy arrays; the setup and controller are one pickle)."""
-
-    setup: dict[str, Any]
-    arrays: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
-
-    def save(self, path: Any) -> None:
-        """Writes the snapshot as a compressed .npz at path (a str or Path ending in .npz)."""
-        blob = np.frombuffer(pickle.dumps(self.setup, protocol=5), dtype=np.uint8)
-        arrays: dict[str, Any] = {"setup": blob, **self.arrays}
-        np.savez_compressed(path, **arrays)
-
-    @staticmethod
-    def load(path: Any) -> Snapshot:
-        """Reads a snapshot save() wrote (only load snapshots you trust: the setup is a pickle)."""
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files if name != "setup"}
-            setup = pickle.loads(data["setup"].tobytes())
-        return Snapshot(setup, arrays)
 
 
 class World:
@@ -501,13 +478,14 @@ class World:
         }
         if self._stale:
             arrays["stale_hashes"] = self._stale_hashes.copy()
-        return Snapshot(pickle.loads(pickle.dumps(setup)), arrays)
+        return Snapshot(copy.deepcopy(setup), arrays)
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot) -> World:
         """The world a snapshot was taken of, ready to step on as if it had never stopped."""
         s = snapshot.setup
         a = snapshot.arrays
+        _check_snapshot(s, a)
         world = cls.__new__(cls)
         world.params = s["params"]
         world.arena = s["arena"]
@@ -541,6 +519,37 @@ class World:
             world._stale_hashes = a["stale_hashes"].copy()
             k.stale_index(world._stale_hashes, world._stale_members, world._stale_start)
         return world
+
+
+def _check_snapshot(setup: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> None:
+    """ValueError, saying what, for a snapshot whose arrays do not fit one another or its set-up
+    (cut short, of another type, not finite): the kernels index them without bounds checks."""
+    expected = {
+        "pos": (2, np.floating), "ref": (2, np.floating), "vel": (2, np.floating),
+        "body": (k.BODY_ROWS, np.floating), "flags": (k.FLAG_ROWS, np.uint8),
+        "ext": (None, np.int64),
+    }  # fmt: skip
+    missing = [name for name in (*expected, "objects") if name not in arrays]
+    if missing:
+        raise ValueError(f"no {', '.join(missing)} array")
+    n = arrays["ext"].shape[0] if arrays["ext"].ndim == 1 else -1
+    for name, (rows, kind) in expected.items():
+        array = arrays[name]
+        shape = (n,) if rows is None else (rows, n)
+        if array.shape != shape or not np.issubdtype(array.dtype, kind):
+            raise ValueError(f"{name} is {array.dtype}{list(array.shape)}, not {shape}")
+        if kind is np.floating and not np.isfinite(array).all():
+            raise ValueError(f"{name} holds numbers that are not finite")
+    if n < 1 or not np.array_equal(np.sort(arrays["ext"]), np.arange(n)):
+        raise ValueError("ext is not an order of the particles")
+    objects = arrays["objects"]
+    count = len(setup.get("objects", ()))
+    if objects.shape != (count, k.OBJECT_COLS) or not np.isfinite(objects).all():
+        raise ValueError(f"objects is {list(objects.shape)}, not {count} finite rows")
+    if not isinstance(setup.get("params"), PhysicsParams):
+        raise ValueError("its set-up lacks the physics")
+    if not isinstance(setup.get("steps"), int) or setup["steps"] < 0:
+        raise ValueError("its set-up lacks the step count")
 
 
 class _View:

@@ -1,6 +1,6 @@
 """The root of every error particlebot raises, so that a script can catch them all at once.
 
-ParticlebotError
+    ParticlebotError
 """
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import errno
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -82,24 +83,24 @@ def test_a_csv_row_the_disk_refuses_is_cut_back_to_the_last_whole_row(tmp_path: 
     class HalfThenFull:
         """A file on a disk that takes 5 bytes of the next row, then is full."""
 
-        def __init__(self, inner: object) -> None:
+        def __init__(self, inner: Any) -> None:
             self.inner = inner
             self.taken = False
 
         def tell(self) -> int:
-            return self.inner.tell()  # type: ignore[attr-defined,no-any-return]
+            return self.inner.tell()
 
         def truncate(self, size: int) -> int:
-            return self.inner.truncate(size)  # type: ignore[attr-defined,no-any-return]
+            return self.inner.truncate(size)
 
         def write(self, data: bytes) -> int:
             if self.taken:
                 raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
             self.taken = True
-            return self.inner.write(data[:5])  # type: ignore[attr-defined,no-any-return]
+            return self.inner.write(data[:5])
 
         def close(self) -> None:
-            self.inner.close()  # type: ignore[attr-defined]
+            self.inner.close()
 
     log._stream = HalfThenFull(log._stream)  # type: ignore[assignment]
     with pytest.raises(OutputError, match="No space left on device"):

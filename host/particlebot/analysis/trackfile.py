@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from particlebot.fileio import atomic_open
+
 FloatArray = npt.NDArray[np.float64]
 
 COLUMNS = ("t_s", "x_cm", "y_cm", "area_cm2", "quality", "frame")
@@ -82,7 +84,7 @@ def _number(value: float, digits: int) -> str:
 def write_track(path: Path, rows: Iterable[TrackRow], meta: dict[str, str]) -> int:
     """Writes the header lines and rows; returns how many rows."""
     count = 0
-    with path.open("w", encoding="utf-8", newline="") as stream:
+    with atomic_open(path, "w", encoding="utf-8", newline="") as stream:  # whole or absent
         stream.write(f"{MAGIC}\n")
         for key, value in meta.items():
             stream.write(f"# {key}: {value}\n")

@@ -251,6 +251,13 @@ def _track(
     bar = ProgressBar(f"track {source.path.name}", source.frame_count)
     try:
         result = track(source, tracker, step, progress=bar.update, on_frame=on_frame)
+    except BaseException:
+        if writer is not None:
+            # An error mid-way (a full disk): an overlay cut short may not decode; none instead.
+            writer.close()
+            writer.path.unlink(missing_ok=True)
+            writer = None
+        raise
     finally:
         bar.finish()
         if writer is not None:

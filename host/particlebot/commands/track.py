@@ -297,6 +297,16 @@ def run(args: argparse.Namespace) -> int:
     sheet = None if args.no_sheet else Path(args.sheet or video_path.with_suffix(".sheet.png"))
     if args.rate < 0:
         return fail("--rate must be 0 (every frame) or positive")
+    for flag, height in (
+        ("--lamp-height-cm", args.lamp_height_cm),
+        ("--outline-height-cm", args.outline_height_cm),
+    ):
+        # The floor's geometry divides by the camera's height above each of them.
+        if height >= args.camera_height_cm:
+            return fail(
+                f"{flag} {height:g} must be below --camera-height-cm {args.camera_height_cm:g}: "
+                "the camera looks down on it"
+            )
     try:
         with open_video(video_path, args.fps) as source:
             geometry = _geometry(args, source.size)

@@ -158,7 +158,24 @@ def _fleet_from(document: Mapping[str, Any]) -> Fleet:
                 calibration=dict(calibration),
             )
         )
+    _check_addresses(fleet)
     return fleet
+
+
+def _check_addresses(fleet: Fleet) -> None:
+    """FleetError when two radios of the fleet share an address: frames for one would reach
+    the other, and the roster could not tell them apart."""
+    holders: dict[str, str] = {}
+    if fleet.base_station is not None:
+        holders[fleet.base_station.radio_address] = "[base_station]"
+    for particle_id, particle in sorted(fleet.particles.items()):
+        address = particle.radio_address
+        if address is None:
+            continue
+        where = f"[particles.{particle_id}]"
+        if address in holders:
+            raise FleetError(f"{where}: radio_address {address} is {holders[address]}'s already")
+        holders[address] = where
 
 
 def _only(table: Mapping[str, Any], known: tuple[str, ...], where: str) -> None:

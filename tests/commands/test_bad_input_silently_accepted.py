@@ -96,3 +96,12 @@ def test_a_scheduler_address_that_is_not_dask_is_one_line(
     argv = ["study", "speed", "--quick", "--scheduler", not_dask, "--results", str(tmp_path / "r")]
     assert_refused_here(argv, f"{not_dask} answers, but not as a Dask scheduler", capsys)
     assert not (tmp_path / "r").exists()  # refused before anything was written
+
+
+def test_an_unusual_value_runs_with_a_warning(tmp_path: Path) -> None:
+    from particlebot.sim.scenarios.build import build_world
+    from particlebot.sim.scenarios.toml_file import parse_scenario
+
+    text = "duration_s = 1\n[swarm]\nparticles = 3\n[physics]\ndt = 0.03\nshear = 0\n"
+    built = build_world(parse_scenario(text, tmp_path / "s.toml"))
+    assert any("physics.dt: dt x sqrt(spring) is 1.3, near the 2" in n for n in built.notes)

@@ -150,6 +150,7 @@ def build_world(scenario: Scenario, controller: Controller | None = None) -> Bui
         free_mask = np.concatenate([free_mask, np.ones(loose.count, dtype=np.bool_)])
 
     scenario, notes = _walls(scenario, xy, radii, objects)
+    notes = scenario.unusual() + notes
     robot = placement.count
     dead = scenario.dead.resolve(robot)
     if dead > robot:

@@ -15,7 +15,12 @@ from particlebot.sim.particles.model.firmware import FirmwareSettings
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.world.arena import Circle, Rect
 from particlebot.sim.world.light import ShadowMode
-from particlebot.sim.world.params import BYTES_FIXED, BYTES_PER_PARTICLE, PhysicsParams
+from particlebot.sim.world.params import (
+    BYTES_FIXED,
+    BYTES_PER_PARTICLE,
+    STABLE,
+    PhysicsParams,
+)
 
 Precision = Literal["float64", "float32"]
 
@@ -229,6 +234,18 @@ class Scenario:
                 check_number(value, PLACE)
             except OptionError as exc:
                 raise self.error(key, f"{exc} (m)") from None
+
+    def unusual(self) -> list[str]:
+        """Warnings for values that can be right but seldom are (a run goes on with them)."""
+        p = self.physics
+        notes = []
+        ringing = p.dt * math.sqrt(p.spring * max(1.0, p.obstacle_spring_factor))
+        if ringing > STABLE / 2:
+            notes.append(
+                f"{self.source.where('physics.dt')}: dt x sqrt(spring) is {ringing:.2g}, near "
+                f"the {STABLE:g} where contacts blow up: collisions will be coarse"
+            )
+        return notes
 
     def _places(self) -> Iterator[tuple[str, float]]:
         """Every coordinate and size of the scenario (m), by the key that gives it."""

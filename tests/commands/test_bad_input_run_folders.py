@@ -58,7 +58,9 @@ def test_the_folder_has_the_snapshots_these_tests_damage(run: Path) -> None:
     ]  # fmt: skip
 
 
-@pytest.mark.parametrize("damage", ["truncated", "bit flipped", "arrays cut short", "strings"])
+@pytest.mark.parametrize(
+    "damage", ["truncated", "bit flipped", "arrays cut short", "strings", "full of NaN"]
+)
 def test_a_damaged_latest_snapshot_is_named_and_the_run_goes_on_from_the_one_before(
     damage: str, run: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -72,7 +74,13 @@ def test_a_damaged_latest_snapshot_is_named_and_the_run_goes_on_from_the_one_bef
     else:
         with np.load(latest, allow_pickle=False) as loaded:
             arrays = {name: loaded[name] for name in loaded.files}
-        arrays["pos"] = arrays["pos"][:, :2] if damage == "arrays cut short" else np.array("x")
+        if damage == "full of NaN":  # once a segfault in the kernels' cell arithmetic
+            arrays["pos"] = np.full_like(arrays["pos"], np.nan)
+            arrays["vel"] = np.full_like(arrays["vel"], np.nan)
+        elif damage == "arrays cut short":
+            arrays["pos"] = arrays["pos"][:, :2]
+        else:
+            arrays["pos"] = np.array("x")
         np.savez_compressed(latest, **arrays)
 
     code, err = resume(run, capsys)

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from typing import NoReturn, Protocol, cast
 
 from particlebot import __version__, resources
+from particlebot.errors import ParticlebotError
 from particlebot.protocol import DEFINITION_HASH
 
 # Subcommand -> what it does. Each is the module particlebot.commands.<name> (a dash becomes an
@@ -108,10 +109,26 @@ def build_parser() -> argparse.ArgumentParser:
 STDOUT_ERRNOS = frozenset({errno.EPIPE, errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
 
 
+INTERRUPTED = 130
+"""The exit status of a command stopped by Ctrl-C (128 + SIGINT), as shells report it."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    command = ""
     try:
-        return command_module(args.command).run(args)
+        args = build_parser().parse_args(argv)
+        command = args.command
+        return command_module(command).run(args)
+    except ParticlebotError as exc:
+        # A command that does not catch an error of ours itself still says it in one line.
+        where = f"{command}: " if command else ""
+        print(f"particlebot: {where}{exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        # Ctrl-C before a command's own handling begins (while it imports numba, say), or in
+        # one that has none: what it wrote is whole (outputs go through particlebot.fileio).
+        print("particlebot: interrupted", file=sys.stderr)
+        return INTERRUPTED
     except OSError as exc:
         if exc.errno not in STDOUT_ERRNOS or exc.filename is not None:
             raise

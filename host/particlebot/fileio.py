@@ -1,5 +1,6 @@
 """Files written whole or not at all: every output the package writes goes through a temporary
-name in the target's own folder, is flushed to disk, and only then renamed over the target."""
+name in the target's own folder, is flushed to disk, and only then renamed over the target; a
+place that cannot be written is one line (OutputError)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
+from particlebot.errors import ParticlebotError
+
 # Why the same folder: rename is atomic only within one file system, and a reader (a resume, a
 # study's store, a person's file manager) sees either the old file or the new one, never half.
 # Why fsync before the rename: after a power cut the rename could otherwise reach the disk before
@@ -19,12 +22,45 @@ from typing import IO
 # write the target's format.
 
 
+class OutputError(ParticlebotError, OSError):
+    """An output that cannot be written where it was asked for; the message names the path and
+    the reason ("cannot write runs/x: Read-only file system"). An OSError too, so that callers
+    which catch OSError around a write keep working."""
+
+
+def cannot_write(path: Path | str, exc: OSError) -> OutputError:
+    """The one-line error for an OSError met while writing `path`."""
+    if isinstance(exc, OutputError):
+        return exc
+    reason = exc.strerror or str(exc)
+    where = exc.filename if isinstance(exc.filename, str) and exc.filename else str(path)
+    return OutputError(f"cannot write {where}: {reason}")
+
+
+def make_folder(path: Path | str) -> Path:
+    """Creates a folder (and its parents) for outputs; OutputError naming it, and why, when it
+    cannot be (a file in its place, read-only, a place such as /proc)."""
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"cannot write {folder}: a file is in the way") from None
+    except OSError as exc:
+        raise cannot_write(folder, exc) from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {folder}: Permission denied")
+    return folder
+
+
 def temporary_beside(path: Path) -> Path:
     """A new, empty file next to `path` whose name no output glob matches (made 0600)."""
     folder = path.parent if str(path.parent) else Path(".")
-    handle, name = tempfile.mkstemp(
-        dir=folder, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}"
-    )
+    try:
+        handle, name = tempfile.mkstemp(
+            dir=folder, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}"
+        )
+    except OSError as exc:
+        raise cannot_write(path, exc) from None
     os.close(handle)
     return Path(name)
 
@@ -62,8 +98,10 @@ def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
         with open(temporary, "rb+") as stream:
             os.fsync(stream.fileno())
         _commit(temporary, path, mode)
-    except BaseException:
+    except BaseException as exc:
         temporary.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise cannot_write(path, exc) from exc
         raise
 
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from particlebot.errors import ParticlebotError
 
@@ -64,6 +65,55 @@ SWITCH = Bounds(minimum=0, maximum=1)
 """0 off, 1 on."""
 SPEED = Bounds(above=0, words=(("max", math.inf),))
 """Times real time; `max` runs as fast as the machine allows."""
+REACH_M = 1e4
+"""No place (a lamp, an obstacle, where a swarm starts) lies further than this from the origin:
+10 km is beyond any arena, and squares of such lengths stay exact enough."""
+PLACE = Bounds(minimum=-REACH_M, maximum=REACH_M)
+"""A coordinate in metres."""
+LONGEST_S = 1e8
+"""Simulated or recorded seconds (three years): nothing of a real swarm runs longer."""
+DURATION = Bounds(above=0, maximum=LONGEST_S)
+"""A length of time in seconds."""
+SPAN_S = Bounds(minimum=0, maximum=LONGEST_S)
+"""A length of time in seconds that may be 0."""
+LENGTH_CM = Bounds(above=0, maximum=REACH_M * 100)
+"""A size or height in centimetres (a camera's height, a particle's diameter)."""
+DISTANCE_CM = Bounds(minimum=0, maximum=REACH_M * 100)
+"""A distance in centimetres that may be 0 (a particle right under the lamp)."""
+FRAME_RATE = Bounds(above=0, maximum=1000)
+"""Frames per second: no camera of a swarm films faster than 1,000."""
+
+
+def check_number(value: Any, bounds: Bounds = ANY, kind: str = "a number") -> float:
+    """`value` as a float when it is a finite number within bounds (a bool is not a number);
+    OptionError saying what was wanted otherwise. The one range check behind command-line
+    options, scenario keys and settings, so that 1e308, inf, NaN and 10**400 meet the same
+    answer wherever they come in."""
+    try:
+        number = float(value) if isinstance(value, int | float) else math.nan
+    except OverflowError:  # an int beyond a float's range: 10**400
+        number = math.copysign(math.inf, value)
+    if isinstance(value, bool) or not math.isfinite(number) or not bounds.contains(number):
+        shown = repr(value) if isinstance(value, str) else _short(value)
+        raise OptionError(f"must be {bounds.describe(kind)}, not {shown}")
+    return number
+
+
+def check_fields(settings: object, ranges: Mapping[str, Bounds]) -> None:
+    """Every named field of a settings object within its bounds; OptionError (a ValueError)
+    that starts with the field's name, as scenario readers expect of settings' own checks."""
+    for name, bounds in ranges.items():
+        value = getattr(settings, name)
+        kind = "a whole number" if isinstance(value, int) and not isinstance(value, bool) else ""
+        try:
+            check_number(value, bounds, kind or "a number")
+        except OptionError as exc:
+            raise OptionError(f"{name} {exc}") from None
+
+
+def _short(value: Any) -> str:
+    text = str(value)
+    return text if len(text) <= 24 else f"{text[:10]}...({len(text)} digits)"
 
 
 def parse_float(text: str, bounds: Bounds = ANY) -> float:

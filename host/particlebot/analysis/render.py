@@ -16,6 +16,7 @@ import numpy.typing as npt
 from particlebot.analysis.camera import Camera
 from particlebot.analysis.synthetic import SwarmFrame
 from particlebot.analysis.video import Image, VideoWriter
+from particlebot.fileio import atomic_open
 
 FloatImage = npt.NDArray[np.float32]
 
@@ -245,13 +246,18 @@ def render_video(
     """Writes every frame to path (.mp4 or .avi) and returns the truth of each."""
     renderer = Renderer(scene)
     result = RenderResult(path, 0)
-    with VideoWriter(path, fps, scene.camera.image_size) as writer:
-        for frame in frames:
-            writer.write(renderer.render(frame))
-            result.truth.append(Truth.of(frame))
-            result.frames += 1
-            if progress is not None:
-                progress(result.frames)
+    try:
+        with VideoWriter(path, fps, scene.camera.image_size) as writer:
+            for frame in frames:
+                writer.write(renderer.render(frame))
+                result.truth.append(Truth.of(frame))
+                result.frames += 1
+                if progress is not None:
+                    progress(result.frames)
+    except BaseException:
+        # Ctrl-C or an error mid-way: a video cut short may not decode; better none at all.
+        path.unlink(missing_ok=True)
+        raise
     return result
 
 
@@ -259,7 +265,7 @@ TRUTH_COLUMNS = ("t_s", "mean_x_cm", "mean_y_cm", "region_x_cm", "region_y_cm", 
 
 
 def write_truth(path: Path, truth: Iterable[Truth]) -> None:
-    with path.open("w", encoding="utf-8", newline="") as stream:
+    with atomic_open(path, newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(TRUTH_COLUMNS)
         for row in truth:

@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.errors import ParticlebotError
+from particlebot.fileio import atomic_open
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -84,7 +85,7 @@ def _number(value: float, digits: int) -> str:
 def write_track(path: Path, rows: Iterable[TrackRow], meta: dict[str, str]) -> int:
     """Writes the header lines and rows; returns how many rows."""
     count = 0
-    with path.open("w", encoding="utf-8", newline="") as stream:
+    with atomic_open(path, newline="") as stream:  # whole or absent
         stream.write(f"{MAGIC}\n")
         for key, value in meta.items():
             stream.write(f"# {key}: {value}\n")

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, TextIO
 from particlebot.commands._arguments import add_radio_options
 from particlebot.commands._common import fail, sigterm_as_interrupt
 from particlebot.options import (
+    DISTANCE_CM,
+    LENGTH_CM,
     NON_NEGATIVE,
     POSITIVE,
     Bounds,
@@ -104,11 +106,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     light = sensors.add_mutually_exclusive_group()
     light.add_argument(
         "--distances",
-        type=number_list(NON_NEGATIVE),
+        type=number_list(DISTANCE_CM),
         help=f"floor distances (cm) from the point under the lamp (default {DEFAULT_DISTANCES})",
     )
     light.add_argument(
-        "--lux", type=number_list(POSITIVE), help="illuminances (lx) read with a lux meter instead"
+        "--lux",
+        type=number_list(Bounds(above=0, maximum=1e6)),  # full sunlight is 10^5 lx
+        help="illuminances (lx) read with a lux meter instead",
     )
     sensors.add_argument(
         "--line",
@@ -146,12 +150,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     place = check.add_mutually_exclusive_group()
     place.add_argument(
         "--spacing-cm",
-        type=float_arg(POSITIVE),
+        type=float_arg(LENGTH_CM),
         help=f"a place every SPACING cm from under the lamp (default {DEFAULT_SPACING_CM:g})",
     )
     place.add_argument(
         "--positions",
-        type=number_list(NON_NEGATIVE),
+        type=number_list(DISTANCE_CM),
         help="each particle's place (cm), in id order",
     )
     _trials_option(check)
@@ -253,6 +257,9 @@ def run(args: argparse.Namespace) -> int:
         ValueError,
     ) as exc:
         return fail(f"calibrate {action}: {exc}")
+    except OSError as exc:  # an output place that cannot be written (-o under a file, /proc)
+        where = exc.filename if exc.filename else "its outputs"
+        return fail(f"calibrate {action}: cannot write {where}: {exc.strerror or exc}")
 
 
 # ---- shared --------------------------------------------------------------------------------------

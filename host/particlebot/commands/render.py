@@ -8,12 +8,28 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
+from particlebot.options import (
+    DURATION,
+    FRAME_RATE,
+    Bounds,
+    float_arg,
+    int_arg,
+)
 from particlebot.progress import ProgressBar
 
 if TYPE_CHECKING:
     from particlebot.analysis.synthetic import SwarmFrame
 
 DEFAULT_LAMP_CM = (55.0, 45.0)
+LARGEST_SIDE = 8192
+"""Pixels: H.264's largest level stops at 8192 x 4320, and no tracker test needs more."""
+MOST_FRAMES = 1_000_000
+"""A video of more frames (a 55-hour run at 5 fps) is beyond any tracker test."""
+BYTES_PER_BODY = 64
+"""Memory one particle takes in one frame before rendering (centre, radius and their copies)."""
+BYTES_PER_PIXEL = 64
+"""Memory one pixel of the frame size takes while a frame is drawn (the floor's map in float64,
+its colour channels, the blur's copies)."""
 
 DESCRIPTION = """\
 Renders what the paper's camera would film (225 cm above a 285x160 cm field, optionally tilted):
@@ -40,16 +56,34 @@ def add_arguments(render: argparse.ArgumentParser) -> None:
         metavar="X,Y",
         help="lamp on the field, cm (default 55,45; for a run, where its light is, if known)",
     )
-    render.add_argument("--noise", type=float, default=3.0, help="sensor noise, grey levels (3)")
-    blob = render.add_argument_group("the made-up blob")
-    blob.add_argument("--particles", type=int, default=10, help="how many (10)")
-    blob.add_argument("--start", default="190,95", metavar="X,Y", help="its centre, field cm")
-    blob.add_argument("--speed-mm-s", type=float, default=1.0, help="drift toward the lamp (1)")
-    blob.add_argument("--duration-s", type=float, default=180.0, help="length (180 s)")
     render.add_argument(
-        "--fps", type=float, help="frames per second (5 for the blob, 1 for a run, interpolated)"
+        "--noise",
+        type=float_arg(Bounds(minimum=0, maximum=255)),
+        default=3.0,
+        help="sensor noise, grey levels (3)",
     )
-    blob.add_argument("--seed", type=int, default=1, help="random seed (1)")
+    blob = render.add_argument_group("the made-up blob")
+    blob.add_argument(
+        "--particles", type=int_arg(Bounds(minimum=1)), default=10, help="how many (10)"
+    )
+    blob.add_argument("--start", default="190,95", metavar="X,Y", help="its centre, field cm")
+    blob.add_argument(
+        "--speed-mm-s",
+        type=float_arg(Bounds(minimum=-1e3, maximum=1e3)),
+        default=1.0,
+        help="drift toward the lamp (1)",
+    )
+    blob.add_argument(
+        "--duration-s", type=float_arg(DURATION), default=180.0, help="length (180 s)"
+    )
+    render.add_argument(
+        "--fps",
+        type=float_arg(FRAME_RATE),
+        help="frames per second (5 for the blob, 1 for a run, interpolated)",
+    )
+    blob.add_argument(
+        "--seed", type=int_arg(Bounds(minimum=0, maximum=2**32 - 1)), default=1, help="seed (1)"
+    )
 
 
 def _frames(
@@ -62,8 +96,7 @@ def _frames(
 
     if args.source is None:
         fps = 5.0 if args.fps is None else args.fps
-        if args.particles < 1 or args.duration_s <= 0 or fps <= 0:
-            raise ValueError("--particles, --duration-s and --fps must be positive")
+        _check_size(args.duration_s, fps, args.particles)
         lamp = lamp if lamp is not None else DEFAULT_LAMP_CM
         spec = synthetic.BlobSpec(
             count=args.particles,
@@ -83,13 +116,27 @@ def _frames(
         (float(start[0]), float(start[1])), parse_pair(args.start, "--start")
     )
     fps = 1.0 if args.fps is None else args.fps
-    if fps <= 0:
-        raise ValueError("--fps must be positive")
+    _check_size(float(run.time_s[-1] - run.time_s[0]), fps, run.particles)
     frames = synthetic.frames_from_run(run, placement, fps)
     if lamp is None and series.lamp_cm is not None:
         lx, ly = placement.to_field(series.lamp_cm[0] / 100, series.lamp_cm[1] / 100)
         lamp = (float(lx), float(ly))
     return frames, fps, lamp
+
+
+def _check_size(duration_s: float, fps: float, particles: int) -> None:
+    """TooBigError before any frame is made when the video has too many frames or its frames
+    would not fit in memory."""
+    from particlebot.machine import TooBigError, check_memory
+
+    count = duration_s * fps + 1
+    if count > MOST_FRAMES:
+        raise TooBigError(
+            f"{duration_s:g} s at {fps:g} fps is {count:.3g} frames; at most {MOST_FRAMES:,}"
+        )
+    check_memory(
+        count * particles * BYTES_PER_BODY, f"{count:,.0f} frames of {particles:,} particles"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -98,13 +145,15 @@ def run(args: argparse.Namespace) -> int:
     from particlebot.analysis.render import Scene, render_video, write_truth
     from particlebot.analysis.sources import SourceError
     from particlebot.analysis.video import VideoError
+    from particlebot.machine import check_memory
     from particlebot.sim.runs.simcsv import SimFormatError
 
     output = Path(args.output)
     try:
         width, height = (int(v) for v in parse_pair(args.size, "--size", "x"))
-        if width < 64 or height < 64:
-            raise ValueError("--size must be at least 64x64")
+        if not (64 <= width <= LARGEST_SIDE and 64 <= height <= LARGEST_SIDE):
+            raise ValueError(f"--size must be 64x64 to {LARGEST_SIDE}x{LARGEST_SIDE}")
+        check_memory(width * height * BYTES_PER_PIXEL, f"frames of {width}x{height}")
         tilt = [float(v) for v in args.tilt.split(",")]
         if len(tilt) != 3:
             raise ValueError("--tilt must be PITCH,ROLL,YAW in degrees")

@@ -14,6 +14,7 @@ from particlebot.experiments.plan import (
     is_simulated,
     load_experiment,
 )
+from particlebot.fileio import make_folder
 from particlebot.radio import RadioError
 from particlebot.swarm.api import method_letter
 
@@ -54,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     log_dir = args.log_dir or experiment.log_dir or Path("logs")
     runner = Runner(experiment, url, log_dir, out=sys.stdout)
+    make_folder(runner.folder)  # one line (OutputError), before any trial, if it cannot be made
     with sigterm_as_interrupt():
         outcome = runner.run()
     if outcome.error is not None:

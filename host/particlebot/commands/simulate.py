@@ -19,7 +19,14 @@ from typing import TYPE_CHECKING
 from particlebot.commands._common import fail
 from particlebot.commands._kernels import prepare_kernels
 from particlebot.devices import DEVICES
-from particlebot.options import NON_NEGATIVE, POSITIVE, Bounds, OptionError, float_arg, int_arg
+from particlebot.options import (
+    DURATION,
+    PLACE,
+    Bounds,
+    OptionError,
+    float_arg,
+    int_arg,
+)
 from particlebot.options import parse_float as parse_number
 from particlebot.progress import ProgressBar
 
@@ -39,6 +46,10 @@ after the current chunk of steps and keeps a snapshot: `simulate --resume RUN_FO
 LAMP_DIAMETERS = 3.5
 """A quick run's lamp: this many densest-packing diameters of the swarm to its -x side (the
 published main puts its light 3.5 packing diameters away)."""
+SEEDS = Bounds(minimum=0, maximum=2**63 - 1)
+"""A seed is written into the run folder's TOML, whose whole numbers are 64-bit."""
+HEIGHT = Bounds(above=0, maximum=PLACE.maximum)
+"""A lamp's height (m)."""
 HEX_DENSITY = 0.9069
 """Packing fraction of a hexagonal packing of discs, for the swarm's packing diameter."""
 
@@ -54,9 +65,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--particles", type=int_arg(Bounds(minimum=1)), metavar="N", help="swarm size (10)"
     )
     quick.add_argument(
-        "--duration", type=float_arg(POSITIVE), metavar="S", help="simulated seconds (600)"
+        "--duration", type=float_arg(DURATION), metavar="S", help="simulated seconds (600)"
     )
-    quick.add_argument("--seed", type=int_arg(NON_NEGATIVE), metavar="K", help="random seed (0)")
+    quick.add_argument("--seed", type=int_arg(SEEDS), metavar="K", help="random seed (0)")
     quick.add_argument(
         "--controller",
         choices=("published", "firmware"),
@@ -68,7 +79,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="lamp position and height, m (default: 3.5 packing diameters toward -x, 0.28 m up)",
     )
     quick.add_argument(
-        "--dump-interval", type=float_arg(POSITIVE), metavar="S", help="CSV row interval (60)"
+        "--dump-interval", type=float_arg(DURATION), metavar="S", help="CSV row interval (60)"
     )
     quick.add_argument(
         "--per-particle", action="store_true", help="every particle's x, y, vx, vy, r in the CSV"
@@ -112,8 +123,8 @@ def _lamp(text: str) -> tuple[float, float, float | None]:
     parts = text.split(",")
     if len(parts) not in (2, 3):
         raise OptionError(f"must be X,Y or X,Y,H in metres, not '{text}'")
-    x, y = parse_number(parts[0]), parse_number(parts[1])
-    height = parse_number(parts[2], POSITIVE) if len(parts) == 3 else None
+    x, y = parse_number(parts[0], PLACE), parse_number(parts[1], PLACE)
+    height = parse_number(parts[2], HEIGHT) if len(parts) == 3 else None
     return x, y, height
 
 
@@ -204,7 +215,13 @@ def stop_requests() -> Iterator[Callable[[], bool]]:
 
 def run(args: argparse.Namespace) -> int:
     from particlebot.devices import DeviceError
-    from particlebot.sim.runs.run import Run, RunError, check_run_folder, default_folder
+    from particlebot.sim.runs.run import (
+        Run,
+        RunError,
+        check_run_folder,
+        claim_run_folder,
+        default_folder,
+    )
     from particlebot.sim.runs.video import VideoError
     from particlebot.sim.scenarios.scenario import ScenarioError
 
@@ -228,6 +245,8 @@ def run(args: argparse.Namespace) -> int:
                 trajectory=_trajectory(args),
                 device=args.device,
             )
+            for note in session.notes:
+                print(f"note: {note}", file=sys.stderr)
         else:
             from particlebot.sim.scenarios.build import build_world
 
@@ -236,17 +255,26 @@ def run(args: argparse.Namespace) -> int:
             else:
                 scenario = quick_scenario(args.particles if args.particles is not None else 10)
             scenario = with_flags(scenario, args)
-            prepare_kernels()
-            print(
-                f"building {scenario.name}: {scenario.swarm.particles} particles", file=sys.stderr
-            )
-            built = build_world(scenario, device=args.device)
-            for note in built.notes:
-                print(f"note: {note}", file=sys.stderr)
+            # What can be refused is, before the kernels load: a refusal is one line.
+            scenario.check_feasible()
             folder = Path(args.output) if args.output else default_folder(scenario.name)
-            session = Run.start(
-                built, folder, record_video=args.video, trajectory=_trajectory(args)
-            )
+            created = claim_run_folder(folder)
+            try:
+                prepare_kernels()
+                print(
+                    f"building {scenario.name}: {scenario.swarm.particles} particles",
+                    file=sys.stderr,
+                )
+                built = build_world(scenario, device=args.device)
+                for note in built.notes:
+                    print(f"note: {note}", file=sys.stderr)
+                session = Run.start(
+                    built, folder, record_video=args.video, trajectory=_trajectory(args)
+                )
+            except BaseException:
+                if created and folder.is_dir() and not any(folder.iterdir()):
+                    folder.rmdir()  # nothing of this run was written: no folder either
+                raise
         session.world.thread_count = args.threads  # None: the world measures and chooses
         summary = _advance(session)
     except (ScenarioError, RunError, DeviceError) as exc:

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from particlebot.commands._common import fail
+from particlebot.options import DURATION, LENGTH_CM, SPAN_S, float_arg
 
 if TYPE_CHECKING:
     from particlebot.analysis.stats import StatsResult
@@ -34,22 +35,25 @@ def add_arguments(stats: argparse.ArgumentParser) -> None:
         "sources", nargs="+", metavar="SOURCE", help="TRACK.csv, CSV, session log or folder"
     )
     stats.add_argument(
-        "--interval-s", type=float, default=30.0, help="sampling interval (30, as in S6)"
+        "--interval-s",
+        type=float_arg(DURATION),
+        default=30.0,
+        help="sampling interval (30, as in S6)",
     )
     stats.add_argument(
         "--average-s",
-        type=float,
+        type=float_arg(SPAN_S),
         default=0.0,
         help="average the centroid over this window around each sample (0: one frame, as S6)",
     )
     stats.add_argument(
         "--cycle-s",
-        type=float,
+        type=float_arg(DURATION),
         help="cycle period for %%D/cycle (default: the source's, else 9 = the paper's runs)",
     )
     stats.add_argument(
         "--diameter-cm",
-        type=float,
+        type=float_arg(LENGTH_CM),
         help="contracted diameter for %%D/cycle (default: the firmware's 15.5)",
     )
     stats.add_argument(

@@ -194,8 +194,13 @@ def _study(
         planned = {spec.run_id for spec in specs}
         failed = {k: v for k, v in store.load_failures().items() if k in planned}
         return _report(study, options, specs, store, runner.name, failed)
-    from particlebot.studies.engine import ClusterError, run_study
+    from particlebot.studies.engine import ClusterError, check_scheduler, run_study
 
+    try:
+        if args.scheduler is not None:
+            check_scheduler(args.scheduler)  # before a line is printed or a file written
+    except ClusterError as exc:
+        return fail(str(exc))
     try:
         store.prepare()
         store.write_document(

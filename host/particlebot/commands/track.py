@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from particlebot.commands._common import fail
+from particlebot.options import DISTANCE_CM, FRAME_RATE, LENGTH_CM, Bounds, float_arg
 from particlebot.progress import ProgressBar
 
 if TYPE_CHECKING:
@@ -48,7 +49,9 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
     )
     where.add_argument("--checkerboard", metavar="PICTURE", help="picture of a board on the floor")
     where.add_argument("--board", default="9x6", help="its inner corners, columns x rows (9x6)")
-    where.add_argument("--square-cm", type=float, default=5.0, help="its square size (5 cm)")
+    where.add_argument(
+        "--square-cm", type=float_arg(LENGTH_CM), default=5.0, help="its square size (5 cm)"
+    )
     where.add_argument(
         "--board-origin-cm",
         default="0,0",
@@ -56,22 +59,27 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
         help="floor position of its top-left inner corner (rows along floor x)",
     )
     where.add_argument(
-        "--camera-height-cm", type=float, default=225.0, help="lens above the floor (225)"
+        "--camera-height-cm",
+        type=float_arg(LENGTH_CM),
+        default=225.0,
+        help="lens above the floor (225)",
     )
     where.add_argument(
         "--outline-height-cm",
-        type=float,
+        type=float_arg(DISTANCE_CM),
         default=0.0,
         help="height of the particles' outline above the floor, to undo parallax (0)",
     )
     what = track.add_argument_group("what to track")
     what.add_argument(
         "--rate",
-        type=float,
+        type=float_arg(Bounds(minimum=0, maximum=FRAME_RATE.maximum)),
         default=2.0,
         help="frames analysed per second of video (2; 0 = every frame)",
     )
-    what.add_argument("--fps", type=float, help="the video's frame rate, if its file is wrong")
+    what.add_argument(
+        "--fps", type=float_arg(FRAME_RATE), help="the video's frame rate, if its file is wrong"
+    )
     what.add_argument(
         "--lamp",
         default="auto",
@@ -79,7 +87,10 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
         help="find the lamp's head (auto), none, or mask R cm (15) around floor X,Y",
     )
     what.add_argument(
-        "--lamp-height-cm", type=float, default=35.0, help="height of the lamp's head (35)"
+        "--lamp-height-cm",
+        type=float_arg(DISTANCE_CM),
+        default=35.0,
+        help="height of the lamp's head (35)",
     )
     what.add_argument(
         "--ignore",
@@ -90,7 +101,7 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
     )
     what.add_argument(
         "--particle-diameter-cm",
-        type=float,
+        type=float_arg(LENGTH_CM),
         help="contracted diameter (default: the firmware's R_min x 2 = 15.5)",
     )
     out = track.add_argument_group("pictures")
@@ -240,6 +251,13 @@ def _track(
     bar = ProgressBar(f"track {source.path.name}", source.frame_count)
     try:
         result = track(source, tracker, step, progress=bar.update, on_frame=on_frame)
+    except BaseException:
+        if writer is not None:
+            # An error mid-way (a full disk): an overlay cut short may not decode; none instead.
+            writer.close()
+            writer.path.unlink(missing_ok=True)
+            writer = None
+        raise
     finally:
         bar.finish()
         if writer is not None:
@@ -279,6 +297,16 @@ def run(args: argparse.Namespace) -> int:
     sheet = None if args.no_sheet else Path(args.sheet or video_path.with_suffix(".sheet.png"))
     if args.rate < 0:
         return fail("--rate must be 0 (every frame) or positive")
+    for flag, height in (
+        ("--lamp-height-cm", args.lamp_height_cm),
+        ("--outline-height-cm", args.outline_height_cm),
+    ):
+        # The floor's geometry divides by the camera's height above each of them.
+        if height >= args.camera_height_cm:
+            return fail(
+                f"{flag} {height:g} must be below --camera-height-cm {args.camera_height_cm:g}: "
+                "the camera looks down on it"
+            )
     try:
         with open_video(video_path, args.fps) as source:
             geometry = _geometry(args, source.size)

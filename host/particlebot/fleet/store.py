@@ -24,7 +24,7 @@ import tomlkit.exceptions
 from tomlkit.items import Integer, Item, Trivia
 
 from particlebot.errors import ParticlebotError
-from particlebot.fileio import write_text
+from particlebot.fileio import cannot_write, write_text
 from particlebot.fleet.model import (
     BaseStationRecord,
     Fleet,
@@ -163,7 +163,24 @@ def _fleet_from(document: Mapping[str, Any]) -> Fleet:
                 calibration=dict(calibration),
             )
         )
+    _check_addresses(fleet)
     return fleet
+
+
+def _check_addresses(fleet: Fleet) -> None:
+    """FleetError when two radios of the fleet share an address: frames for one would reach
+    the other, and the roster could not tell them apart."""
+    holders: dict[str, str] = {}
+    if fleet.base_station is not None:
+        holders[fleet.base_station.radio_address] = "[base_station]"
+    for particle_id, particle in sorted(fleet.particles.items()):
+        address = particle.radio_address
+        if address is None:
+            continue
+        where = f"[particles.{particle_id}]"
+        if address in holders:
+            raise FleetError(f"{where}: radio_address {address} is {holders[address]}'s already")
+        holders[address] = where
 
 
 def _only(table: Mapping[str, Any], known: tuple[str, ...], where: str) -> None:
@@ -347,7 +364,10 @@ def save_fleet(fleet: Fleet, path: Path) -> None:
         text = render(fleet, previous)
     except tomlkit.exceptions.TOMLKitError:  # not TOML: written afresh, as a new file is
         text = render(fleet)
-    write_text(path, text, mode=PRIVATE_MODE)
+    try:
+        write_text(path, text, mode=PRIVATE_MODE)
+    except OSError as exc:  # a file where the folder should be, read-only, /proc
+        raise FleetFileError(str(cannot_write(path, exc))) from None
 
 
 def create_fleet(fleet: Fleet, path: Path, *, replace: bool = False) -> None:

@@ -8,6 +8,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 
 from particlebot.errors import ParticlebotError
+from particlebot.machine import TooBigError, check_memory
+from particlebot.options import LONGEST_S
 from particlebot.studies import published as paper
 from particlebot.studies.measures import GapPassage, ObjectCarry, RobotAdvance, SpeedTowardLight
 from particlebot.studies.packing import densest_packing_diameter_m
@@ -466,11 +468,20 @@ def resolve(study: Study, raw: RawOptions) -> StudyOptions:
     if placement not in PLACEMENTS:
         raise StudyOptionError(f"--placement: {placement!r} is not one of {', '.join(PLACEMENTS)}")
     overrides = () if raw.overrides is None else parse_overrides(raw.overrides)
+    runs = len(sizes) * max(1, len(values)) * seeds
+    if runs > MOST_RUNS:
+        raise StudyOptionError(
+            f"{len(sizes)} sizes x {max(1, len(values))} values x {seeds:,} seeds is {runs:,} "
+            f"runs; a study holds at most {MOST_RUNS:,}"
+        )
     return StudyOptions(
         sizes, values, seeds, first_seed, duration, skip, placement, raw.quick, overrides
     )
 
 
+MOST_RUNS = 1_000_000
+"""Runs of one study: the paper's largest has 2,750; a million is weeks of a cluster's time and
+as many result files, and listing more would itself take minutes."""
 CONTROLLER_OVERRIDES = ("phase_noise", "update_cycles")
 """The published controller's numbers `--set` may change (the others shape the 12 s cycle the
 studies' durations and Table S4 are counted in)."""
@@ -528,9 +539,18 @@ def _items(flag: str, text: str) -> list[str]:
 
 
 def _sizes(text: str) -> tuple[int, ...]:
+    """Swarm sizes, each one whose world fits in this machine's memory (the study lays out
+    each size's geometry here before any worker sees it)."""
+    from particlebot.sim.world.params import BYTES_FIXED, BYTES_PER_PARTICLE  # no numba
+
     sizes = tuple(_whole(item, "--sizes", 1) for item in _items("--sizes", text))
     if len(set(sizes)) != len(sizes):
         raise StudyOptionError(f"--sizes: {text!r} names a size twice")
+    largest = max(sizes)
+    try:
+        check_memory(BYTES_FIXED + BYTES_PER_PARTICLE * largest, f"a swarm of {largest:,}")
+    except TooBigError as exc:
+        raise StudyOptionError(f"--sizes: {exc}") from None
     return sizes
 
 
@@ -538,7 +558,7 @@ def _numbers(flag: str, text: str) -> tuple[float, ...]:
     values = []
     for item in _items(flag, text):
         try:
-            values.append(float(item))
+            values.append(float(item))  # the sweep's own check says which are its values
         except ValueError:
             raise StudyOptionError(f"{flag}: {item!r} is not a number") from None
     if len(set(values)) != len(values):
@@ -567,4 +587,6 @@ def _seconds(text: str, flag: str, allow_zero: bool = False) -> float:
     seconds = float(match.group(1)) * _UNITS[match.group(2) or ""]
     if seconds < 0 or (seconds == 0 and not allow_zero):
         raise StudyOptionError(f"{flag}: {text!r} must be more than zero")
+    if not seconds <= LONGEST_S:
+        raise StudyOptionError(f"{flag}: {text!r} is longer than {LONGEST_S:g} s, three years")
     return seconds

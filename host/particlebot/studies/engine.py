@@ -77,6 +77,12 @@ class StudyWorkerSetup(WorkerPlugin):
         await asyncio.get_running_loop().run_in_executor(None, self.runner.warm_up)
 
 
+def check_scheduler(address: str) -> None:
+    """ClusterError unless a Dask scheduler answers at address (within dask_client's timeout)."""
+    with dask_client(address):
+        pass
+
+
 @contextmanager
 def dask_client(
     scheduler: str | None, workers: int | None = None, verbose: bool = False
@@ -90,6 +96,12 @@ def dask_client(
             client = Client(scheduler, timeout="10s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        except Exception as exc:
+            # Something else answers there (a web server): Dask reads its bytes as a message's
+            # length and fails in ways of its own ("Unable to allocate 3.07 EiB").
+            raise ClusterError(
+                f"{scheduler} answers, but not as a Dask scheduler ({type(exc).__name__})"
+            ) from None
         try:
             yield client
         finally:

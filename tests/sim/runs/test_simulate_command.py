@@ -97,7 +97,7 @@ def test_flags_change_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixt
     [
         (["--particles", "0"], "--particles: must be a whole number >= 1"),
         (["--duration", "nan"], "--duration: must be a number > 0"),
-        (["--seed", "-1"], "--seed: must be a whole number >= 0"),
+        (["--seed", "-1"], "--seed: must be a whole number 0.."),
         (["--lamp", "1"], "--lamp: must be X,Y or X,Y,H"),
         (["--lamp", "1,inf"], "--lamp: must be a number"),
         (["--lamp", "1,2,-3"], "--lamp: must be a number > 0"),

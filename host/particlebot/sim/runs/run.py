@@ -21,25 +21,26 @@ import json
 import shutil
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from particlebot.devices import DeviceError
 from particlebot.errors import ParticlebotError
-from particlebot.fileio import atomic_path
+from particlebot.fileio import atomic_path, make_folder, write_text
 from particlebot.sim.runs import video
-from particlebot.sim.runs.csvlog import CsvLog
+from particlebot.sim.runs.csvlog import CsvDamagedError, CsvLog
 from particlebot.sim.runs.pictures import Frame, View, save_swarm_picture, save_track_plot
 from particlebot.sim.runs.simcsv import SimFormatError, read_published_csv
 from particlebot.sim.runs.trajectory import GSD_FILE, XYZ_FILE, GsdLog, TrajectoryLog, XyzLog
 from particlebot.sim.scenarios.build import Built
-from particlebot.sim.scenarios.scenario import PlacementKind, Scenario
+from particlebot.sim.scenarios.scenario import ControllerKind, PlacementKind, Scenario
 from particlebot.sim.scenarios.toml_file import read_scenario
 from particlebot.sim.scenarios.write import to_published_cfg, to_toml
-from particlebot.sim.world.cuda.device import DeviceError
-from particlebot.sim.world.world import Snapshot, World
+from particlebot.sim.world.snapshot import Snapshot, SnapshotError
+from particlebot.sim.world.world import World
 
 SCENARIO_FILE = "scenario.toml"
 PUBLISHED_FILE = "published.cfg"
@@ -56,6 +57,10 @@ CHUNK_WALL_S = 0.25
 
 class RunError(ParticlebotError, ValueError):
     """A run folder that cannot be used: taken, or not a run to resume."""
+
+
+class BlownUpError(RunError):
+    """The world's state stopped being finite numbers: the run stops at the last good snapshot."""
 
 
 @dataclass
@@ -104,6 +109,18 @@ def default_folder(name: str, root: Path = Path("runs")) -> Path:
     return folder
 
 
+def claim_run_folder(folder: Path) -> bool:
+    """Makes sure a new run can go into `folder` before anything is built for it: RunError when
+    it holds something already, OutputError (naming it, and why) when it cannot be created or
+    written. Returns whether this call created it (the caller removes it again, empty, if the
+    run never starts)."""
+    if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+        raise RunError(f"{folder} exists and is not empty: resume it with --resume {folder}")
+    created = not folder.exists()
+    make_folder(folder)
+    return created
+
+
 def latest_snapshot(folder: Path) -> Path | None:
     snapshots = sorted((folder / SNAPSHOTS).glob("step-*.npz"))
     return snapshots[-1] if snapshots else None
@@ -145,6 +162,8 @@ class Run:
         self.total_steps = scenario.steps
         self._frame_every = frame_every
         self._snapshot_step = -1
+        self.notes: list[str] = []
+        """What a resume found worth saying (a damaged snapshot skipped, a view redrawn)."""
         self.pictures = True
         """Draw swarm-start.png, swarm.png and track.png (a study's throwaway runs do not: the
         three pictures cost four times a 10-particle half-hour's simulation)."""
@@ -169,9 +188,33 @@ class Run:
         trajectory: the formats of the whole trajectory to write ("gsd", "xyz")."""
         if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
             raise RunError(f"{folder} exists and is not empty: resume it with --resume {folder}")
+        created = not folder.exists()
+        make_folder(folder)
+        try:
+            return cls._begin(built, folder, record_video, pictures, trajectory)
+        except BaseException:
+            # Nothing half-written: a folder this call made goes again, whatever stopped it.
+            if created:
+                shutil.rmtree(folder, ignore_errors=True)
+            else:
+                for child in folder.iterdir():
+                    if child.is_dir():
+                        shutil.rmtree(child, ignore_errors=True)
+                    else:
+                        child.unlink(missing_ok=True)
+            raise
+
+    @classmethod
+    def _begin(
+        cls,
+        built: Built,
+        folder: Path,
+        record_video: bool,
+        pictures: bool,
+        trajectory: tuple[str, ...],
+    ) -> Run:
         scenario, world = built.scenario, built.world
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / SNAPSHOTS).mkdir()
+        make_folder(folder / SNAPSHOTS)
         if scenario.swarm.placement is PlacementKind.FILE and scenario.swarm.file is not None:
             shutil.copyfile(
                 scenario.swarm.file, folder / ("positions" + scenario.swarm.file.suffix)
@@ -192,7 +235,7 @@ class Run:
         )
         frame = Frame.of(world)
         view = View.around(frame, (world.lamp.x, world.lamp.y), world.arena, _title(scenario))
-        (folder / "view.json").write_text(json.dumps(view.to_json()) + "\n")
+        write_text(folder / "view.json", json.dumps(view.to_json()) + "\n")
         bodies = world.count + len(world.objects)
         csv = CsvLog.create(
             folder / scenario.output.csv_name, scenario.seed, bodies, scenario.output.per_particle
@@ -218,22 +261,18 @@ class Run:
         trajectory: tuple[str, ...] = (),
         device: str = "cpu",
     ) -> Run:
-        """Continues a run from its latest snapshot; the CSV and trajectory files lose what was
-        written after it (the resumed run writes it again, the same). duration_s moves the run's
-        end (later or earlier, not before the snapshot), and the folder's scenario says so.
-        trajectory: formats to write from now on besides those the run writes already. device:
-        where the world steps (World's)."""
-        snapshot = check_run_folder(folder)
+        """Continues a run from its latest snapshot that can be read (a damaged later one is
+        skipped, with a note); the CSV loses the rows written after it (the resumed run writes
+        them again, the same). duration_s moves the run's end (later or earlier, not before the
+        snapshot), and the folder's scenario says so. RunError, naming the file, for a folder
+        that cannot go on: no readable snapshot, a damaged run.json or CSV, or a scenario.toml
+        edited since the run began (another swarm, time step or lamp). trajectory: formats to write
+        from now on besides those the run writes already. device: where the world steps."""
+        check_run_folder(folder)
         scenario = read_scenario(folder / SCENARIO_FILE)
+        world, notes = _latest_world(folder, device)
+        state = _read_state(folder)
         try:
-            world = World.from_snapshot(Snapshot.load(snapshot), device=device)
-        except DeviceError:
-            raise
-        except (OSError, ValueError, KeyError, EOFError) as exc:
-            raise RunError(f"{snapshot}: cannot be read ({exc})") from None
-        try:
-            state = json.loads((folder / STATE_FILE).read_text())
-            view_data = json.loads((folder / "view.json").read_text())
             centroid = state["centroid_start"]
             start = (
                 (float(centroid[0]), float(centroid[1])),
@@ -244,8 +283,14 @@ class Run:
             kinds = [str(kind) for kind in state.get("trajectory", [])]
             if any(kind not in _TRAJECTORY_LOGS for kind in kinds):
                 raise ValueError(f"trajectory formats {kinds}")
-        except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
-            raise RunError(f"{folder}: damaged run files ({exc})") from None
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            raise RunError(f"{folder / STATE_FILE} is damaged ({exc!r} missing or wrong)") from None
+        changed = _changes(scenario, world, particles)
+        if changed:
+            raise RunError(
+                f"{folder / SCENARIO_FILE} was edited since the run began ({'; '.join(changed)}): "
+                "a resumed run goes on as it began; run the edited scenario as a new run"
+            )
         if duration_s is not None:
             if round(duration_s / world.params.dt) < world.steps:
                 raise RunError(
@@ -253,16 +298,25 @@ class Run:
                 )
             scenario = replace(scenario, duration_s=duration_s)
             _write_scenario(folder, scenario, particles)
-        view = View.from_json(view_data, world.arena)
+        view = _read_view(folder, world, scenario, notes)
         csv_path = folder / scenario.output.csv_name
         if not csv_path.is_file():
             raise RunError(f"{folder}: its CSV {csv_path.name} is missing")
-        csv = CsvLog.resume(csv_path, world.t, scenario.output.per_particle)
+        bodies = world.count + len(world.objects)
+        try:
+            csv, csv_note = CsvLog.resume(
+                csv_path, world.t, scenario.output.per_particle, scenario.seed, bodies
+            )
+        except CsvDamagedError as exc:
+            raise RunError(str(exc)) from None
+        if csv_note:
+            notes.append(csv_note)
         record_video = record_video or bool(state.get("video"))
         kinds += [kind for kind in trajectory if kind not in kinds]
         logs = _trajectory_logs(folder, kinds, resume_at=world.steps)
         run = cls(folder, scenario, world, csv, view, start, record_video, frame_every, logs)
         run.pictures = pictures
+        run.notes = notes
         run._snapshot_step = world.steps
         if (record_video and not state.get("video")) or kinds != state.get("trajectory", []):
             _write_state(folder, {**state, "video": record_video, "trajectory": kinds})
@@ -337,11 +391,19 @@ class Run:
         began = time.monotonic()
         steps_before = world.steps
         chunk = 1
+        blown_up = False
         try:
             while not self.finished and not should_stop():
                 tick = time.monotonic()
                 world.step(min(chunk, self.total_steps - world.steps))
                 took = time.monotonic() - tick
+                if not world.finite():
+                    blown_up = True  # its snapshot would hold NaN: the last good one stays
+                    raise BlownUpError(
+                        f"the world's state stopped being finite numbers by {world.t:g} s "
+                        f"(step {world.steps}): the physics is unstable for these settings; "
+                        f"{self.folder} keeps its last good snapshot"
+                    )
                 # Aim for chunks of CHUNK_WALL_S: progress stays live, a stop acts soon.
                 rate = chunk / max(took, 1e-6)
                 chunk = max(1, min(int(rate * CHUNK_WALL_S), 4 * chunk))
@@ -349,10 +411,11 @@ class Run:
                     progress(self, time.monotonic() - began)
         finally:
             wall = time.monotonic() - began
-            snapshot = self._snapshot()
+            snapshot = None if blown_up else self._snapshot()
             self.csv.close()
             for log in self.trajectories:
                 log.close()
+        assert snapshot is not None
         return self._finish(wall, world.steps - steps_before, snapshot, video_progress)
 
     def _finish(
@@ -405,7 +468,7 @@ class Run:
             snapshot=str(snapshot),
             video=film,
         )
-        (folder / SUMMARY_FILE).write_text(json.dumps(summary.to_json(), indent=1) + "\n")
+        write_text(folder / SUMMARY_FILE, json.dumps(summary.to_json(), indent=1) + "\n")
         return summary
 
 
@@ -434,13 +497,84 @@ def _write_scenario(folder: Path, scenario: Scenario, particles: int) -> None:
     positions = None
     if scenario.swarm.placement is PlacementKind.FILE and scenario.swarm.file is not None:
         positions = "positions" + scenario.swarm.file.suffix
-    (folder / SCENARIO_FILE).write_text(to_toml(scenario, positions), encoding="utf-8")
-    (folder / PUBLISHED_FILE).write_text(to_published_cfg(scenario, particles), encoding="utf-8")
+    write_text(folder / SCENARIO_FILE, to_toml(scenario, positions))
+    write_text(folder / PUBLISHED_FILE, to_published_cfg(scenario, particles))
+
+
+def _latest_world(folder: Path, device: str = "cpu") -> tuple[World, list[str]]:
+    """The world of the latest snapshot that reads whole (on `device`), and a note for each later
+    one that does not; RunError when none does."""
+    notes: list[str] = []
+    for path in sorted((folder / SNAPSHOTS).glob("step-*.npz"), reverse=True):
+        try:
+            world = World.from_snapshot(Snapshot.load(path), device=device)
+        except DeviceError:
+            raise
+        except SnapshotError as exc:
+            notes.append(str(exc))
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            notes.append(f"{path}: damaged ({exc})")
+        else:
+            if notes:
+                notes[-1] += f"; resuming from {path.name}"
+            return world, notes
+    raise RunError(notes[0] if len(notes) == 1 else f"no snapshot can be read: {notes[0]}")
+
+
+def _read_state(folder: Path) -> dict[str, Any]:
+    path = folder / STATE_FILE
+    try:
+        state = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise RunError(f"{path} is missing") from None
+    except (OSError, ValueError) as exc:
+        raise RunError(f"{path} is damaged ({exc})") from None
+    if not isinstance(state, dict):
+        raise RunError(f"{path} is damaged (not a JSON object)")
+    return state
+
+
+def _read_view(folder: Path, world: World, scenario: Scenario, notes: list[str]) -> View:
+    """view.json's frame for the pictures; drawn afresh from the world (and the file written
+    again) when it is damaged: it is only where the pictures look."""
+    path = folder / "view.json"
+    try:
+        return View.from_json(json.loads(path.read_text(encoding="utf-8")), world.arena)
+    except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
+        lamp = (world.lamp.x, world.lamp.y)
+        view = View.around(Frame.of(world), lamp, world.arena, _title(scenario))
+        write_text(path, json.dumps(view.to_json()) + "\n")
+        notes.append(f"{path} was damaged ({type(exc).__name__}); written again from the snapshot")
+        return view
+
+
+def _changes(scenario: Scenario, world: World, particles: int) -> list[str]:
+    """What the folder's scenario says differently from the world its snapshot holds."""
+    changed = []
+    if scenario.swarm.placement is not PlacementKind.FILE and scenario.swarm.particles != particles:
+        changed.append(f"swarm.particles {particles} -> {scenario.swarm.particles}")
+    for f in fields(scenario.physics):
+        was, now = getattr(world.params, f.name), getattr(scenario.physics, f.name)
+        if was != now:
+            changed.append(f"physics.{f.name} {was} -> {now}")
+    if scenario.seed != world.seed:
+        changed.append(f"seed {world.seed} -> {scenario.seed}")
+    if (scenario.lamp.x, scenario.lamp.y) != (world.lamp.x, world.lamp.y):
+        changed.append(
+            f"lamp ({world.lamp.x:g}, {world.lamp.y:g}) -> "
+            f"({scenario.lamp.x:g}, {scenario.lamp.y:g})"
+        )
+    settings = getattr(world.controller, "settings", None)
+    spec = scenario.controller
+    wanted = spec.firmware if spec.kind is ControllerKind.FIRMWARE else spec.published
+    if settings is not None and settings != wanted:
+        changed.append("[controller]")
+    return changed
 
 
 def _write_state(folder: Path, state: dict[str, Any]) -> None:
     """run.json: what a resume needs besides the scenario and the snapshot."""
-    (folder / STATE_FILE).write_text(json.dumps(state) + "\n")
+    write_text(folder / STATE_FILE, json.dumps(state) + "\n")
 
 
 def _title(scenario: Scenario) -> str:

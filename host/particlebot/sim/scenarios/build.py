@@ -113,7 +113,8 @@ def build_world(
     instead of the scenario's: the swarm of firmware particles drives the world with theirs),
     on `device` (World's; DeviceError, a ValueError too, when it cannot be had);
     ScenarioError (one line that names the file, line and key) when the scenario cannot be put
-    down as written."""
+    down as written; TooBigError when it would not fit in memory."""
+    scenario.check_feasible()
     params = scenario.physics
     placement = place_swarm(scenario)
     xy = placement.xy
@@ -153,6 +154,7 @@ def build_world(
         free_mask = np.concatenate([free_mask, np.ones(loose.count, dtype=np.bool_)])
 
     scenario, notes = _walls(scenario, xy, radii, objects)
+    notes = scenario.unusual() + notes
     robot = placement.count
     dead = scenario.dead.resolve(robot)
     if dead > robot:

@@ -11,6 +11,7 @@ from dataclasses import fields, is_dataclass
 from enum import Enum
 from typing import Any, TypeVar
 
+from particlebot.options import REACH_M, Bounds, OptionError, check_number
 from particlebot.sim.scenarios.scenario import ScenarioError, SourceMap
 
 T = TypeVar("T")
@@ -61,10 +62,17 @@ class Fields:
         *,
         minimum: float | None = None,
         above: float | None = None,
+        maximum: float | None = None,
     ) -> float:
         if key not in table:
             return default
-        return self.check_number(table[key], _join(prefix, key), minimum=minimum, above=above)
+        return self.check_number(
+            table[key], _join(prefix, key), minimum=minimum, above=above, maximum=maximum
+        )
+
+    def place(self, table: Mapping[str, Any], key: str, prefix: str, default: float) -> float:
+        """A coordinate (m) within REACH_M of the origin."""
+        return self.number(table, key, prefix, default, minimum=-REACH_M, maximum=REACH_M)
 
     def check_number(
         self,
@@ -73,31 +81,40 @@ class Fields:
         *,
         minimum: float | None = None,
         above: float | None = None,
+        maximum: float | None = None,
     ) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"must be a number, not {_show(value)}")
-        if not math.isfinite(value):
-            raise self.fail(key, f"must be a finite number, not {value}")
-        if minimum is not None and value < minimum:
-            raise self.fail(key, f"must be >= {minimum:g}, not {value:g}")
-        if above is not None and value <= above:
-            raise self.fail(key, f"must be > {above:g}, not {value:g}")
-        return float(value)
+        try:
+            return check_number(value, Bounds(minimum=minimum, above=above, maximum=maximum))
+        except OptionError as exc:
+            raise self.fail(key, str(exc)) from None
 
     def integer(
-        self, table: Mapping[str, Any], key: str, prefix: str, default: int, *, minimum: int = 0
+        self,
+        table: Mapping[str, Any],
+        key: str,
+        prefix: str,
+        default: int,
+        *,
+        minimum: int = 0,
+        maximum: int | None = None,
     ) -> int:
         if key not in table:
             return default
-        return self.check_integer(table[key], _join(prefix, key), minimum=minimum)
+        return self.check_integer(table[key], _join(prefix, key), minimum=minimum, maximum=maximum)
 
-    def check_integer(self, value: Any, key: str, *, minimum: int | None = 0) -> int:
+    def check_integer(
+        self, value: Any, key: str, *, minimum: int | None = 0, maximum: int | None = None
+    ) -> int:
         if isinstance(value, float) and math.isfinite(value) and value.is_integer():
             value = int(value)
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.fail(key, f"must be a whole number, not {_show(value)}")
-        if minimum is not None and value < minimum:
-            raise self.fail(key, f"must be a whole number >= {minimum}, not {value}")
+        try:
+            check_number(value, Bounds(minimum=minimum, maximum=maximum), "a whole number")
+        except OptionError as exc:
+            raise self.fail(key, str(exc)) from None
         return value
 
     def boolean(self, table: Mapping[str, Any], key: str, prefix: str, default: bool) -> bool:
@@ -134,7 +151,8 @@ class Fields:
     def numbers(
         self, table: Mapping[str, Any], key: str, prefix: str, length: int
     ) -> tuple[float, ...] | None:
-        """A list of exactly `length` finite numbers, or None when the key is absent."""
+        """A list of exactly `length` coordinates (within REACH_M), or None when the key is
+        absent."""
         if key not in table:
             return None
         value = table[key]
@@ -143,7 +161,7 @@ class Fields:
             raise self.fail(where, f"must be a list of {length} numbers, not {_show(value)}")
         if len(value) != length:
             raise self.fail(where, f"must be a list of {length} numbers, not {len(value)}")
-        return tuple(self.check_number(v, where) for v in value)
+        return tuple(self.check_number(v, where, minimum=-REACH_M, maximum=REACH_M) for v in value)
 
     def settings(self, cls: type[T], table: Mapping[str, Any], prefix: str, base: T) -> T:
         """A frozen settings dataclass from `base` with the table's keys replaced; the keys are
@@ -182,6 +200,8 @@ class Fields:
             message = str(exc)
             # The settings' own checks name the field first; point at its line.
             named = [n for n in names if message.startswith(n) or f" {n} " in f" {message} "]
+            if named and message.startswith(f"{named[0]} must "):
+                message = message.removeprefix(f"{named[0]} ")  # the key says it already
             raise self.fail(_join(prefix, named[0]) if named else prefix, message) from None
 
     def enum_value(self, kind: type[E], raw: Any, where: str) -> E:

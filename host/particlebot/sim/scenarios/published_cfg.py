@@ -391,7 +391,12 @@ def _published(values: dict[str, Any], fail: Any) -> PublishedSettings:
             f"must be a whole number of cycles ((Nx + 1) x rise_period = {cycle:g} s), "
             f"not {interval:g}",
         )
-    return PublishedSettings(rise_s=rise, nx=nx, update_cycles=cycles, phase_noise=noise)
+    try:
+        return PublishedSettings(rise_s=rise, nx=nx, update_cycles=cycles, phase_noise=noise)
+    except ValueError as exc:
+        key = {"rise_s": "rise_period", "nx": "Nx", "phase_noise": "phase_std"}
+        name = str(exc).split(" ", 1)[0]
+        raise fail(key.get(name, "phase_update_interval"), str(exc)) from None
 
 
 def _obstacles(

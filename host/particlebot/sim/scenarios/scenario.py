@@ -3,19 +3,34 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field, fields
 from enum import StrEnum
 from pathlib import Path
 from typing import Literal
 
 from particlebot.errors import ParticlebotError
+from particlebot.machine import check_memory
+from particlebot.options import LONGEST_S, PLACE, OptionError, check_number
 from particlebot.sim.particles.model.firmware import FirmwareSettings
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.world.arena import Circle, Rect
 from particlebot.sim.world.light import ShadowMode
-from particlebot.sim.world.params import PhysicsParams
+from particlebot.sim.world.params import (
+    BYTES_FIXED,
+    BYTES_PER_PARTICLE,
+    STABLE,
+    PhysicsParams,
+)
 
 Precision = Literal["float64", "float32"]
+
+MAX_SEED = 2**63 - 1
+"""TOML's whole numbers are 64-bit: a larger seed could not be written into a run folder."""
+MAX_DURATION_S = LONGEST_S
+MAX_STEPS = 10**10
+"""Steps of one run: at the 10^6 steps a second a ten-particle swarm makes, three hours; a run
+of more never finishes on any machine."""
 
 
 class ScenarioError(ParticlebotError, ValueError):
@@ -193,6 +208,64 @@ class Scenario:
     def steps(self) -> int:
         """Steps of the whole run."""
         return round(self.duration_s / self.physics.dt)
+
+    def check_feasible(self) -> None:
+        """ScenarioError when the run cannot finish (shorter than one step, more steps than
+        MAX_STEPS); TooBigError when its world would not fit in this machine's memory. Called
+        before anything is placed or allocated."""
+        steps = self.duration_s / self.physics.dt
+        if round(steps) < 1:
+            raise self.error(
+                "duration_s",
+                f"{self.duration_s:g} s is less than one step of physics.dt = "
+                f"{self.physics.dt:g} s: nothing would run",
+            )
+        if steps > MAX_STEPS:
+            raise self.error(
+                "duration_s",
+                f"{self.duration_s:g} s in steps of {self.physics.dt:g} s is {steps:.3g} steps, "
+                f"more than the {MAX_STEPS:.0e} a run can finish",
+            )
+        bodies = self.swarm.particles + self.free.count
+        check_memory(BYTES_FIXED + BYTES_PER_PARTICLE * bodies, f"a swarm of {bodies:,} particles")
+        if not 0 <= self.seed <= MAX_SEED:
+            raise self.error("seed", f"must be a whole number 0..2^63 - 1, not {self.seed}")
+        for key, value in self._places():
+            try:
+                check_number(value, PLACE)
+            except OptionError as exc:
+                raise self.error(key, f"{exc} (m)") from None
+
+    def unusual(self) -> list[str]:
+        """Warnings for values that can be right but seldom are (a run goes on with them)."""
+        p = self.physics
+        notes = []
+        ringing = p.dt * math.sqrt(p.spring * max(1.0, p.obstacle_spring_factor))
+        if ringing > STABLE / 2:
+            notes.append(
+                f"{self.source.where('physics.dt')}: dt x sqrt(spring) is {ringing:.2g}, near "
+                f"the {STABLE:g} where contacts blow up: collisions will be coarse"
+            )
+        return notes
+
+    def _places(self) -> Iterator[tuple[str, float]]:
+        """Every coordinate and size of the scenario (m), by the key that gives it."""
+        yield "lamp", self.lamp.x
+        yield "lamp", self.lamp.y
+        if self.lamp.height is not None:
+            yield "lamp.height", self.lamp.height
+        yield "swarm.at", self.swarm.at[0]
+        yield "swarm.at", self.swarm.at[1]
+        for i, rect in enumerate(self.rects, start=1):
+            for value in (rect.x_min, rect.x_max, rect.y_min, rect.y_max):
+                yield f"rectangle[{i}]", value
+        for i, circle in enumerate(self.circles, start=1):
+            for value in (circle.x, circle.y, circle.radius):
+                yield f"circle[{i}]", value
+        for i, thing in enumerate(self.objects, start=1):
+            for maybe in (thing.x, thing.y, thing.radius):
+                if maybe is not None:
+                    yield f"object[{i}]", maybe
 
     @property
     def dump_every(self) -> int:

@@ -8,10 +8,13 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from particlebot.options import REACH_M
 from particlebot.sim.particles.model.firmware import FirmwareSettings
 from particlebot.sim.particles.model.published import PublishedSettings
 from particlebot.sim.scenarios.fields import Fields
 from particlebot.sim.scenarios.scenario import (
+    MAX_DURATION_S,
+    MAX_SEED,
     ControllerKind,
     ControllerSpec,
     DeadSpec,
@@ -68,6 +71,13 @@ def parse_scenario(text: str, path: Path | None = None) -> Scenario:
         found = re.search(r"\(at line (\d+), column \d+\)", message)
         where = f"{path}:{found.group(1)}" if path and found else str(path or "scenario")
         raise ScenarioError(f"{where}: not valid TOML: {message}") from None
+    if not data:
+        # Every key has a default, so an empty file would run; it is almost surely the wrong
+        # file (or one cut short), and a run of the defaults would hide that.
+        raise ScenarioError(
+            f"{path or 'scenario'}: holds no keys (empty, or only comments): for a run of the "
+            'defaults give no scenario, or at least one key such as name = "run"'
+        )
     source = SourceMap(path, tuple(sorted(key_lines(text).items())))
     return _Reader(source, path.parent if path else Path(".")).scenario(data)
 
@@ -98,8 +108,8 @@ class _Reader:
             controller=self.controller(f.table(data, "controller")),
             physics=physics,
             shadow=shadow,
-            duration_s=f.number(data, "duration_s", "", 600.0, above=0),
-            seed=f.integer(data, "seed", "", 0),
+            duration_s=f.number(data, "duration_s", "", 600.0, above=0, maximum=MAX_DURATION_S),
+            seed=f.integer(data, "seed", "", 0, maximum=MAX_SEED),
             precision="float32" if precision == "float32" else "float64",
             output=self.output(f.table(data, "output")),
             source=self.source,
@@ -136,7 +146,11 @@ class _Reader:
         f.only(table, p, ("particles", "placement", "at", "spacing", "direction_deg", "file"))
         placement = f.choice(table, "placement", p, PlacementKind, PlacementKind.ALGORITHM5)
         at = f.numbers(table, "at", p, 2)
-        spacing = f.number(table, "spacing", p, 0.0, above=0) if "spacing" in table else None
+        spacing = (
+            f.number(table, "spacing", p, 0.0, above=0, maximum=REACH_M)
+            if "spacing" in table
+            else None
+        )
         file = None
         if placement is PlacementKind.FILE:
             if "file" not in table:
@@ -154,15 +168,19 @@ class _Reader:
             placement=placement,
             at=(at[0], at[1]) if at else (0.0, 0.0),
             spacing=spacing,
-            direction_deg=f.number(table, "direction_deg", p, 0.0),
+            direction_deg=f.number(table, "direction_deg", p, 0.0, minimum=-360, maximum=360),
             file=file,
         )
 
     def lamp(self, table: dict[str, Any]) -> LampSpec:
         f, p = self.f, "lamp"
         f.only(table, p, ("x", "y", "height"))
-        height = f.number(table, "height", p, 0.0, above=0) if "height" in table else None
-        return LampSpec(f.number(table, "x", p, 0.0), f.number(table, "y", p, 0.0), height)
+        height = (
+            f.number(table, "height", p, 0.0, above=0, maximum=REACH_M)
+            if "height" in table
+            else None
+        )
+        return LampSpec(f.place(table, "x", p, 0.0), f.place(table, "y", p, 0.0), height)
 
     def _array(self, data: dict[str, Any], key: str) -> list[tuple[str, dict[str, Any]]]:
         """The [[key]] tables with their paths (key[1], key[2], ...)."""
@@ -198,9 +216,9 @@ class _Reader:
                 raise f.fail(p, "needs radius = ...")
             circles.append(
                 Circle(
-                    f.number(table, "x", p, 0.0),
-                    f.number(table, "y", p, 0.0),
-                    f.number(table, "radius", p, 1.0, above=0),
+                    f.place(table, "x", p, 0.0),
+                    f.place(table, "y", p, 0.0),
+                    f.number(table, "radius", p, 1.0, above=0, maximum=REACH_M),
                 )
             )
         return circles
@@ -228,15 +246,19 @@ class _Reader:
                 raise f.fail(f"{p}.radius", "give radius or radius_factor, not both")
             objects.append(
                 ObjectSpec(
-                    x=f.number(table, "x", p, 0.0) if "x" in table else None,
-                    y=f.number(table, "y", p, 0.0) if "y" in table else None,
-                    radius=f.number(table, "radius", p, 0.0, above=0)
+                    x=f.place(table, "x", p, 0.0) if "x" in table else None,
+                    y=f.place(table, "y", p, 0.0) if "y" in table else None,
+                    radius=f.number(table, "radius", p, 0.0, above=0, maximum=REACH_M)
                     if "radius" in table
                     else None,
-                    radius_factor=f.number(table, "radius_factor", p, 2.0, above=0),
-                    mass_factor=f.number(table, "mass_factor", p, 1.0, above=0),
-                    friction_factor=f.number(table, "friction_factor", p, 1.0, minimum=0),
-                    attraction_factor=f.number(table, "attraction_factor", p, 0.0, minimum=0),
+                    radius_factor=f.number(table, "radius_factor", p, 2.0, above=0, maximum=1e3),
+                    mass_factor=f.number(table, "mass_factor", p, 1.0, above=1e-6, maximum=1e6),
+                    friction_factor=f.number(
+                        table, "friction_factor", p, 1.0, minimum=0, maximum=1e3
+                    ),
+                    attraction_factor=f.number(
+                        table, "attraction_factor", p, 0.0, minimum=0, maximum=1e3
+                    ),
                 )
             )
         return objects
@@ -254,7 +276,7 @@ class _Reader:
         return DeadSpec(
             count=f.integer(table, "count", p, 0),
             fraction=fraction,
-            at_s=f.number(table, "at_s", p, 0.0, minimum=0),
+            at_s=f.number(table, "at_s", p, 0.0, minimum=0, maximum=MAX_DURATION_S),
             detach=f.boolean(table, "detach", p, False),
         )
 
@@ -309,10 +331,14 @@ class _Reader:
         if not names["video"].lower().endswith((".mp4", ".gif")):
             raise f.fail("output.video", f"must end in .mp4 or .gif: {names['video']!r}")
         return OutputSpec(
-            dump_interval_s=f.number(table, "dump_interval_s", p, 60.0, above=0),
+            dump_interval_s=f.number(
+                table, "dump_interval_s", p, 60.0, above=0, maximum=MAX_DURATION_S
+            ),
             per_particle=f.boolean(table, "per_particle", p, False),
             csv_name=names["csv"],
-            snapshot_interval_s=f.number(table, "snapshot_interval_s", p, 600.0, above=0),
+            snapshot_interval_s=f.number(
+                table, "snapshot_interval_s", p, 600.0, above=0, maximum=MAX_DURATION_S
+            ),
             video_name=names["video"],
-            video_frames=f.integer(table, "video_frames", p, 200, minimum=1),
+            video_frames=f.integer(table, "video_frames", p, 200, minimum=1, maximum=100_000),
         )

@@ -6,12 +6,35 @@ import math
 from dataclasses import dataclass, fields
 from enum import Enum
 
+from particlebot.options import Bounds, check_fields
+
 # Units throughout the world: metres, seconds, and particle masses of 1 (a force is an
 # acceleration of a particle).
 
 ATTRACTION_FITTED = 1.5884e-5
 """A of F = A / gap^2 (N m^2) as the published model fits it: 4.4 N at a 1.9 mm gap, close to the
 4.5 N peak adhesion of SI S7. The published main multiplies it by 3 for its studies."""
+
+
+BYTES_PER_PARTICLE = 1024
+"""Memory a world holds per particle, with room: a 100,000-particle world peaks at 510 B a
+particle while built and stepped (tracemalloc), the pictures and CSV rows take some more."""
+BYTES_FIXED = 64 << 20
+"""Memory a world holds whatever its size (buffers, the compiled kernels)."""
+MAGNITUDE_LIMIT = 1e9
+"""No number of the model reaches this in a real swarm (the largest, the contact spring, is
+10^3); beyond it a product of two of them leaves the range the kernels compute in."""
+RANGES = {
+    "dt": Bounds(minimum=1e-6, maximum=1.0),
+    "r_min": Bounds(above=0, maximum=10.0),
+    "r_max": Bounds(above=0, maximum=10.0),
+    "half_width": Bounds(above=0, maximum=1e4),
+}
+"""Fields narrower than [0, MAGNITUDE_LIMIT]: a step of a microsecond to a second, bodies up to
+10 m across, walls up to 10 km out."""
+STABLE = 2.0
+"""The explicit integration of a contact spring k and a dashpot c stays bounded while
+dt sqrt(k) < 2 and dt c < 2; the published 0.01 s, k = 1000 and c = 10 + 40 give 0.32 and 0.5."""
 
 
 class NeighbourSearch(Enum):
@@ -99,16 +122,24 @@ class PhysicsParams:
     published 180 s; it lists at t = 0, 180, 360 ... after that step's position update)."""
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool | Enum):
-                continue
-            if not (isinstance(value, float | int) and math.isfinite(value)):
-                raise ValueError(f"{f.name} must be a finite number, not {value!r}")
-            if value < 0:
-                raise ValueError(f"{f.name} must be >= 0, not {value}")
-        if self.dt <= 0:
-            raise ValueError("dt must be > 0")
+        within = Bounds(minimum=0, maximum=MAGNITUDE_LIMIT)
+        numbers = [
+            f.name for f in fields(self) if not isinstance(getattr(self, f.name), bool | Enum)
+        ]
+        check_fields(self, {name: RANGES.get(name, within) for name in numbers})
+        stiffest = self.spring * max(1.0, self.obstacle_spring_factor)
+        if self.dt * math.sqrt(stiffest) >= STABLE:
+            raise ValueError(
+                f"dt {self.dt:g} s is too long for a contact spring of {stiffest:g}: "
+                f"dt x sqrt(spring) must stay below {STABLE:g} (the published 0.01 and 1000 "
+                "give 0.32), or the bodies fly apart"
+            )
+        if self.dt * (self.damping + self.shear) >= STABLE:
+            raise ValueError(
+                f"dt {self.dt:g} s is too long for damping + shear = "
+                f"{self.damping + self.shear:g}: dt x (damping + shear) must stay below "
+                f"{STABLE:g} (the published 0.01 x 50 is 0.5)"
+            )
         if not 0 < self.r_min <= self.r_max:
             raise ValueError(f"need 0 < r_min <= r_max, not {self.r_min}, {self.r_max}")
         if not self.clamp_gap < self.blend_gap:

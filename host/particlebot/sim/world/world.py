@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import copy
 import math
-import pickle
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import numba
@@ -25,6 +25,7 @@ from particlebot.sim.world.arena import Arena
 from particlebot.sim.world.bodies import BodyState, DeadParticles, PassiveObject
 from particlebot.sim.world.light import Lamp, LightField, ShadowMode
 from particlebot.sim.world.params import NeighbourSearch, PhysicsParams
+from particlebot.sim.world.snapshot import Snapshot
 from particlebot.sim.world.threads import ThreadGovernor
 
 if TYPE_CHECKING:
@@ -67,30 +68,6 @@ def _numba_threads(threads: int) -> Iterator[None]:
 class _Observation:
     callback: Observer
     every: int
-
-
-@dataclass
-class Snapshot:
-    """Everything a World needs to continue exactly where it was: its setup, every array in the
-    kernels' order, the random generator and the pickled controller. `save`/`load` keep it in
-    a compressed .npz (no pickle of numpy arrays; the setup and controller are one pickle)."""
-
-    setup: dict[str, Any]
-    arrays: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
-
-    def save(self, path: Any) -> None:
-        """Writes the snapshot as a compressed .npz at path (a str or Path ending in .npz)."""
-        blob = np.frombuffer(pickle.dumps(self.setup, protocol=5), dtype=np.uint8)
-        arrays: dict[str, Any] = {"setup": blob, **self.arrays}
-        np.savez_compressed(path, **arrays)
-
-    @staticmethod
-    def load(path: Any) -> Snapshot:
-        """Reads a snapshot save() wrote (only load snapshots you trust: the setup is a pickle)."""
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files if name != "setup"}
-            setup = pickle.loads(data["setup"].tobytes())
-        return Snapshot(setup, arrays)
 
 
 class World:
@@ -390,6 +367,16 @@ class World:
             objects=self._objects[:, [k.O_X, k.O_Y, k.O_VX, k.O_VY, k.O_R]].copy(),
         )
 
+    def finite(self) -> bool:
+        """Whether every position, velocity and radius is a finite number. Not checked inside
+        the step loop (it costs a pass over the swarm); a caller checks it now and then, and
+        stops a world that has blown up before a NaN reaches the grid's cell arithmetic."""
+        return bool(
+            np.isfinite(self._pos).all()
+            and np.isfinite(self._vel).all()
+            and np.isfinite(self._body[k.B_R]).all()
+        )
+
     def centroid(self, members_only: bool = False) -> tuple[float, float]:
         """Mean centre of every body, passive objects included, as the published CSV has it;
         members_only: of the robot's particles alone (no free, detached or object bodies)."""
@@ -619,7 +606,7 @@ class World:
         }
         if self._stale:
             arrays["stale_hashes"] = self._stale_hashes.copy()
-        return Snapshot(pickle.loads(pickle.dumps(setup)), arrays)
+        return Snapshot(copy.deepcopy(setup), arrays)
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, device: str = "cpu") -> World:
@@ -627,6 +614,7 @@ class World:
         `device`, as World's)."""
         s = snapshot.setup
         a = snapshot.arrays
+        _check_snapshot(s, a)
         world = cls.__new__(cls)
         world.params = s["params"]
         world.arena = s["arena"]
@@ -663,6 +651,37 @@ class World:
         world._cycle = None
         world._place_on(device)
         return world
+
+
+def _check_snapshot(setup: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> None:
+    """ValueError, saying what, for a snapshot whose arrays do not fit one another or its set-up
+    (cut short, of another type, not finite): the kernels index them without bounds checks."""
+    expected = {
+        "pos": (2, np.floating), "ref": (2, np.floating), "vel": (2, np.floating),
+        "body": (k.BODY_ROWS, np.floating), "flags": (k.FLAG_ROWS, np.uint8),
+        "ext": (None, np.int64),
+    }  # fmt: skip
+    missing = [name for name in (*expected, "objects") if name not in arrays]
+    if missing:
+        raise ValueError(f"no {', '.join(missing)} array")
+    n = arrays["ext"].shape[0] if arrays["ext"].ndim == 1 else -1
+    for name, (rows, kind) in expected.items():
+        array = arrays[name]
+        shape = (n,) if rows is None else (rows, n)
+        if array.shape != shape or not np.issubdtype(array.dtype, kind):
+            raise ValueError(f"{name} is {array.dtype}{list(array.shape)}, not {shape}")
+        if kind is np.floating and not np.isfinite(array).all():
+            raise ValueError(f"{name} holds numbers that are not finite")
+    if n < 1 or not np.array_equal(np.sort(arrays["ext"]), np.arange(n)):
+        raise ValueError("ext is not an order of the particles")
+    objects = arrays["objects"]
+    count = len(setup.get("objects", ()))
+    if objects.shape != (count, k.OBJECT_COLS) or not np.isfinite(objects).all():
+        raise ValueError(f"objects is {list(objects.shape)}, not {count} finite rows")
+    if not isinstance(setup.get("params"), PhysicsParams):
+        raise ValueError("its set-up lacks the physics")
+    if not isinstance(setup.get("steps"), int) or setup["steps"] < 0:
+        raise ValueError("its set-up lacks the step count")
 
 
 class _View:

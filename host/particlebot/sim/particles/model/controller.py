@@ -82,8 +82,8 @@ class Controller(ABC):
     clamps them to [r_min, r_max] and then applies the servo's stall limit, so a controller says
     what the servo is told, not where the body ends up. NaN tells a servo to hold where it is
     (the published controller's rest). Controllers draw randomness only from the generator
-    bind() gives, so a run is reproduced by its seed; the world pickles a controller into its
-    snapshots, so its state must pickle (plain attributes and numpy arrays do).
+    bind() gives, so a run is reproduced by its seed; a snapshot stores a controller as data, so
+    its state must be plain attributes, numpy arrays and types listed in sim.world.snapshot.TYPES.
     """
 
     @abstractmethod

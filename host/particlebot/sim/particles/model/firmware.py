@@ -26,7 +26,6 @@ S_n with pb_estimate, the schedule with pb_plan_epoch and the radius with a Nati
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numba
@@ -34,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from particlebot.firmware.native import FirmwareConstants, firmware_constants
+from particlebot.options import Bounds, check_fields
 from particlebot.protocol import PARAM_SPECS, Method, Param
 from particlebot.sim.particles.model.controller import (
     BoolArray,
@@ -88,10 +88,13 @@ class FirmwareSettings:
             raise ValueError(f"wave_size must be an integer, not {self.wave_size!r}")
         if not 0 <= self.wave_size <= _WAVE_SIZE_MAX:
             raise ValueError(f"wave_size = {self.wave_size} is outside 0..{_WAVE_SIZE_MAX}")
-        if not (math.isfinite(self.noise_diameters) and self.noise_diameters >= 0):
-            raise ValueError(f"noise_diameters must be >= 0, not {self.noise_diameters}")
-        if not (math.isfinite(self.start_s) and self.start_s >= 0):
-            raise ValueError(f"start_s must be >= 0, not {self.start_s}")
+        check_fields(
+            self,
+            {
+                "noise_diameters": Bounds(minimum=0, maximum=1e6),
+                "start_s": Bounds(minimum=0, maximum=1e8),  # the scenarios' longest run
+            },
+        )
 
 
 @dataclass(frozen=True)

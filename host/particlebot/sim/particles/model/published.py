@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from particlebot.options import Bounds, check_fields
 from particlebot.sim.particles.model.controller import (
     Controller,
     CycleCommands,
@@ -35,6 +36,16 @@ _PARALLEL_FROM = 4096
 """Below this many particles the profile is filled inline (a parallel region costs more)."""
 _TIME_TOLERANCE = 1e-6
 """Seconds: an update due at t is done at the step whose time is within this of t."""
+
+
+_RANGES = {
+    "rise_s": Bounds(minimum=1e-3, maximum=1e4),
+    "nx": Bounds(minimum=1, maximum=1e6),
+    "update_cycles": Bounds(minimum=1, maximum=1e6),
+    "phase_noise": Bounds(minimum=0, maximum=1e3),
+    "noise_diameters": Bounds(minimum=0, maximum=1e6),
+}
+"""A servo's rise takes a millisecond to hours; noise is a share of rise periods or diameters."""
 
 
 @dataclass(frozen=True)
@@ -53,16 +64,11 @@ class PublishedSettings:
     """Sd of each particle's distance-estimation error, in contracted diameters (Fig. S20)."""
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.rise_s) and self.rise_s > 0):
-            raise ValueError(f"rise_s must be > 0, not {self.rise_s}")
         for name in ("nx", "update_cycles"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a whole number >= 1, not {value!r}")
-        for name in ("phase_noise", "noise_diameters"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be >= 0, not {value}")
+        check_fields(self, _RANGES)
 
     @property
     def cycle_s(self) -> float:

@@ -17,7 +17,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
     for layer in (
         "errors",  # the root of every error
         # helpers; where artefacts live; the protocol (shared/protocol.toml)
-        "closing options toml_lines protocol devices resources fileio progress",
+        "closing options toml_lines protocol devices resources fileio progress machine",
         # reset causes; the native firmware library; the fleet file; the MP4 writer
         "resets firmware fleet videowriter",
         "sim",  # the simulator: world, particles, air, runs, scenarios

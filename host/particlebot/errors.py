@@ -17,11 +17,13 @@ ParticlebotError
  +-- DeviceError (ValueError)             devices
  +-- ExperimentFileError                  experiments.plan
  +-- ExperimentStopped                    experiments.runner
+ +-- OutputError (OSError)                fileio
  +-- NativeLibraryError (OSError)         firmware.native
  +-- FleetError (ValueError)              fleet.model
  +-- FleetFileError                       fleet.store
  +-- LogError                             logs.jsonl
  |    +-- LogFormatError (ValueError)     logs.jsonl
+ +-- TooBigError                          machine
  +-- OptionError (ValueError)             options
  +-- PlotInputError (ValueError)          plots
  +-- FrameError (ValueError)              protocol.frames
@@ -45,11 +47,14 @@ ParticlebotError
  +-- HarnessError (RuntimeError)          sim.particles.emulated.harness
  +-- HarnessBuildError (RuntimeError)     sim.particles.emulated.harness
  +-- RunError (ValueError)                sim.runs.run
+ |    +-- BlownUpError                    sim.runs.run
+ +-- CsvDamagedError (ValueError)         sim.runs.csvlog
  +-- SimFormatError (ValueError)          sim.runs.simcsv
  +-- VideoError (RuntimeError)            sim.runs.video
  +-- PlacementError (ValueError)          sim.scenarios.placement
  +-- ScenarioError (ValueError)           sim.scenarios.scenario
  +-- WorldRecordError (ValueError)        sim.swarm.records
+ +-- SnapshotError (ValueError)           sim.world.snapshot
  +-- StudyOptionError (ValueError)        studies.definitions
  +-- ClusterError (RuntimeError)          studies.engine
  +-- PoolingError (ValueError)            studies.pooling

@@ -11,6 +11,7 @@ from typing import BinaryIO
 
 import numpy as np
 
+from particlebot.errors import ParticlebotError
 from particlebot.fileio import cannot_write, write_text
 from particlebot.sim.world.bodies import BodyState
 
@@ -100,7 +101,7 @@ def _append(path: Path) -> BinaryIO:
         raise cannot_write(path, exc) from None
 
 
-class CsvDamagedError(ValueError):
+class CsvDamagedError(ParticlebotError, ValueError):
     """A run's CSV that is not the text it writes (binary, another encoding)."""
 
 

@@ -44,6 +44,21 @@ class Stray:
     """A soft glare (Gaussian) instead of a sharp-edged spot."""
 
 
+@dataclass(frozen=True)
+class Stand:
+    """A desk lamp's foot on the floor and the arm rising from it to the head: solid, sharp-edged,
+    lit by the lamp itself, and as still as the head, so a tracker must keep them out of the
+    swarm."""
+
+    foot_cm: tuple[float, float]
+    """Centre of the round foot on the floor."""
+    foot_radius_cm: float = 9.0
+    arm_width_cm: float = 2.5
+    foot_level: float = 60.0
+    """Grey level of the foot's metal under the room's light (brightened by the lamp above)."""
+    arm_level: float = 110.0
+
+
 DEFAULT_STRAYS = (
     Stray(250.0, 20.0, 1.2, 200.0),
     Stray(30.0, 140.0, 0.8, 220.0),
@@ -59,6 +74,8 @@ class Scene:
     """The desk lamp's head (SI S3: 35 cm tall)."""
     lamp_radius_cm: float = 7.0
     """Radius of the lamp head as seen from above."""
+    stand: Stand | None = None
+    """The lamp's foot and arm; None draws the head alone (a lamp hung from above)."""
     lamp_strength: float = 3.0
     """The lamp's illuminance at its foot, in units of the room's light."""
     flare: float = 70.0
@@ -144,6 +161,12 @@ class Renderer:
             else:
                 edge = np.clip((stray.radius_cm - np.sqrt(d2)) / 0.3 + 0.5, 0, 1)
                 level = np.maximum(level, stray.level * edge)
+        stand = self.scene.stand
+        if stand is not None:
+            d = np.hypot(fx - stand.foot_cm[0], fy - stand.foot_cm[1])
+            inside = np.clip((stand.foot_radius_cm - d) / 0.3 + 0.5, 0, 1)
+            foot = stand.foot_level * self.lamp_light(*stand.foot_cm)
+            level = level * (1 - inside) + foot * inside
         grey = np.clip(level, 0, 255)
         # The blackout cloth is neutral; the lamp is yellow (more red and green than blue).
         tint = np.array([0.85, 1.0, 1.08])
@@ -209,6 +232,18 @@ class Renderer:
             return
         x, y = self.scene.lamp_cm
         h, r = self.scene.lamp_height_cm, self.scene.lamp_radius_cm
+        stand = self.scene.stand
+        if stand is not None:
+            # The arm: a strip from the foot's middle (on the floor) to the head (h up), its
+            # ends projected at their own heights.
+            fx, fy = stand.foot_cm
+            along = np.array([x - fx, y - fy])
+            across = np.array([-along[1], along[0]]) / max(float(np.hypot(*along)), 1e-9)
+            half = across * stand.arm_width_cm / 2
+            foot, head = np.array([fx, fy]), np.array([x, y])
+            low = self._project([foot + half, foot - half], 0.0)
+            high = self._project([head - half, head + half], h)
+            self._fill(canvas, self._fixed(np.vstack([low, high])), (stand.arm_level,) * 3)
         self._fill(canvas, self._polygon(x, y, r, h), (150.0, 190.0, 205.0))
         self._fill(canvas, self._polygon(x, y, 0.6 * r, h), (255.0, 255.0, 255.0))
 

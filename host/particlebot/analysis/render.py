@@ -8,13 +8,14 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import cv2
 import numpy as np
 import numpy.typing as npt
 
 from particlebot.analysis.camera import Camera
-from particlebot.analysis.synthetic import SwarmFrame
+from particlebot.analysis.synthetic import R_MAX_CM, R_MIN_CM, SwarmFrame
 from particlebot.analysis.video import Image, VideoWriter
 
 FloatImage = npt.NDArray[np.float32]
@@ -92,6 +93,19 @@ class Scene:
     """Brightness lost in the image corners."""
     strays: tuple[Stray, ...] = DEFAULT_STRAYS
     seed: int = 0
+    look: Literal["lab", "published"] = "lab"
+    """'lab': the real robots on a dark floor under the lamp (the parts, the glow, the optics
+    above). 'published': the published simulator's rendering, flat discs on a white floor
+    coloured by radius (PUBLISHED_DISC_BGR), with nothing else in view."""
+
+
+def published_disc_bgr(r_cm: float) -> tuple[float, float, float]:
+    """The published simulator's colour of a live particle of radius r (its updateCol_k): red 30,
+    green from 200 contracted to 20 expanded (squared), blue from 30 to 210 (square root)."""
+    span = R_MAX_CM - R_MIN_CM
+    shrink = min(max((R_MAX_CM - r_cm) / span, 0.0), 1.0)
+    grow = min(max((r_cm - R_MIN_CM) / span, 0.0), 1.0)
+    return (30.0 + 180.0 * math.sqrt(grow), 20.0 + 180.0 * shrink**2, 30.0)
 
 
 @dataclass(frozen=True)
@@ -146,6 +160,8 @@ class Renderer:
 
     def _make_background(self) -> Image:
         width, height = self.camera.image_size
+        if self.scene.look == "published":
+            return np.full((height, width, 3), 255, np.uint8)  # glColor3f(1, 1, 1)
         vv, uu = np.mgrid[0:height, 0:width].astype(np.float64)
         floor = self._floor_of_pixel.to_floor(np.stack([uu.ravel(), vv.ravel()], axis=1))
         fx, fy = floor[:, 0].reshape(height, width), floor[:, 1].reshape(height, width)
@@ -209,6 +225,9 @@ class Renderer:
 
     def _draw_particle(self, canvas: Image, index: int, x: float, y: float, r: float) -> None:
         h = self.scene.particle_height_cm
+        if self.scene.look == "published":
+            self._fill(canvas, self._polygon(x, y, r, h), published_disc_bgr(r))
+            return
         light = float(self.lamp_light(x, y)) * self.scene.particle_level
 
         def colour(bgr: tuple[float, float, float]) -> tuple[float, ...]:
@@ -251,6 +270,8 @@ class Renderer:
         canvas = self._background.copy()
         for i, (x, y, r) in enumerate(zip(frame.x_cm, frame.y_cm, frame.r_cm, strict=True)):
             self._draw_particle(canvas, i, float(x), float(y), float(r))
+        if self.scene.look == "published":
+            return canvas
         self._draw_lamp(canvas)
         flare, gain = self._optics
         image = (canvas.astype(np.float32) + flare) * gain

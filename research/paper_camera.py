@@ -31,7 +31,10 @@ def main() -> int:
     except ValueError:
         print(f"paper_camera: --cells {args.cells!r} / --seeds {args.seeds!r}", file=sys.stderr)
         return 2
-    film_dead_runs(cells, range(first, last + 1), args.duration_s, args.skip_s, Path(args.results))
+    runs = Path(args.runs) if args.runs else None
+    film_dead_runs(
+        cells, range(first, last + 1), args.duration_s, args.skip_s, Path(args.results), runs
+    )
     return 0
 
 

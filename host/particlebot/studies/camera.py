@@ -9,7 +9,8 @@ vertical field of view) at 1920x1080, so one metre of floor is 540 / tan(30 deg)
 935 / height pixels. A speed read from those videos with the scale of the 1,000-particle camera
 for every size is the true speed times 21.06 / height: x2.23, x1.53, x1.00 and x0.64.
 
-`paper_camera_factor` is that factor (the direct reading); `film` measures it end to end: render
+`studies.published.paper_camera_factor` is that factor (the direct reading, which the dead and
+speed studies report as speed_paper_camera_mm_s); `film` measures it end to end: render
 a run as the published simulator drew it, find the swarm with the project's tracker every 30 s,
 convert its centroid's pixels to metres with the one scale, and compute Table S3's speed.
 """

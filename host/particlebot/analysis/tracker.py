@@ -167,6 +167,9 @@ class SwarmTracker:
         self._recent_areas: deque[float] = deque(maxlen=25)
         self._leaps: list[Detection] = []
         self._scenery_ready = False
+        self.scenery: list[Contour] = []
+        """Outlines (processing pixels) of what the first frame showed beside the lamp that is
+        not the swarm (its foot and arm), masked from then on."""
 
     # -- preparation ------------------------------------------------------------------------------
 
@@ -377,6 +380,8 @@ class SwarmTracker:
             return False
         # The blurred rim of what is masked must not come back as edges.
         grown = as_image(cv2.dilate(grown, np.ones((grow_px, grow_px), np.uint8)))
+        outlines, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        self.scenery = [np.asarray(c, np.int32) for c in outlines]
         self._lamp_mask = as_image(cv2.bitwise_or(self._lamp_mask, grown))
         self._near_lamp = None
         return True

@@ -209,3 +209,19 @@ def test_a_simulator_run_filmed_and_tracked_gives_the_row_its_csv_gives(
     assert csv_row[2] == video_row[2] == "8"  # 4 minutes of 30 s steps
     assert float(video_row[6]) == pytest.approx(float(csv_row[6]), rel=0.05)  # average mm/s
     assert float(csv_row[6]) == pytest.approx(2.0, rel=0.1)
+
+
+def test_track_says_which_frames_it_dropped_in_the_csv_and_the_summary(
+    paper_clip: Clip, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    video = tmp_path / paper_clip.path.name
+    video.symlink_to(paper_clip.path)
+    # A spike threshold below the region's own breathing sway drops some honest frames.
+    assert main(["track", str(video), "--rate", "0", "--no-sheet", "--spike-cm", "0.2"]) == 0
+    out = capsys.readouterr().out
+    assert "Dropped (not written as the track): " in out
+    track = read_track(tmp_path / "paper.track.csv")
+    spiked = [q == "spike" for q in track.quality]
+    assert any(spiked)
+    assert np.isnan(track.x_cm[spiked]).all() and np.isfinite(track.x_cm[~np.array(spiked)]).all()
+    assert track.meta["dropped"].startswith(f"{sum(spiked)} frames, coordinates left empty: ")

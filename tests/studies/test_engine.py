@@ -66,7 +66,8 @@ def test_a_tiny_study_runs_end_to_end_on_two_worker_processes(tmp_path: Path) ->
     assert "8/8 runs" in progress.getvalue()
     report = (results / "report.md").read_text()
     assert "## Table S3" in report and "| | paper | 1.24 ± 0.44 | 0.17 ± 0.30 |" in report
-    assert len((results / "summary.csv").read_text().splitlines()) == 1 + 4
+    # 4 cells, each with the true speed and the paper-camera reading derived from it.
+    assert len((results / "summary.csv").read_text().splitlines()) == 1 + 4 * 2
     assert (results / "plot.png").stat().st_size > 10_000
     assert json.loads((results / "study.json").read_text())["runs"] == [
         s.run_id for s in quick_specs()

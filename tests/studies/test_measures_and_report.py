@@ -143,7 +143,11 @@ def test_cells_get_mean_and_sample_sd_over_seeds_and_keep_unfinished_ones() -> N
     )
     missing = next(s for s in specs if s.cell_dict == {"particles": 100, "dead_fraction": 0.4})
     del records[missing.run_id]
-    stats = {(c.particles, c.value): c for c in collect(study, specs, records)}
+    stats = {
+        (c.particles, c.value): c
+        for c in collect(study, specs, records)
+        if c.metric == "speed_mm_s"
+    }
     assert stats[(10, 0.0)].mean == pytest.approx(0.2)
     assert stats[(10, 0.0)].sd == pytest.approx(0.1)
     assert stats[(100, 0.4)].runs == 2 and stats[(100, 0.4)].planned == 3
@@ -226,3 +230,21 @@ def test_the_plot_is_written(tmp_path: Path) -> None:
         path = plot_study(study, collect(study, specs, records), tmp_path / f"{name}.png")
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert path.stat().st_size > 10_000
+
+
+def test_the_paper_camera_speed_is_the_true_one_read_with_the_1000_particle_cameras_scale() -> None:
+    study, options, specs, records = records_for(
+        "dead", RawOptions(sizes="10,1000", values="0", seeds="2"), "speed_mm_s", lambda s: 0.5
+    )
+    stats = {(c.particles, c.metric): c for c in collect(study, specs, records)}
+    # Derived from the stored true speed: cameras at 0.591 x 16 and 5.264 x 4 m.
+    assert stats[(10, "speed_paper_camera_mm_s")].mean == pytest.approx(0.5 * 21.056 / 9.456)
+    assert stats[(1000, "speed_paper_camera_mm_s")].mean == pytest.approx(0.5)
+    text = markdown(study, options, list(stats.values()), {}, "simulator")
+    assert "through the paper's camera" in text
+    assert "| 10 | ours | 1.11 ± 0.00 ✓ |" in text  # 1.11 inside 1.24 ± 0.44; the true 0.50 is not
+    rows = list(csv.DictReader(io.StringIO(csv_text(study, list(stats.values())))))
+    camera = next(
+        r for r in rows if r["metric"] == "speed_paper_camera_mm_s" and r["particles"] == "10"
+    )
+    assert (camera["paper_mean"], camera["within_paper_band"]) == ("1.24", "true")

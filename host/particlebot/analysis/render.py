@@ -8,13 +8,14 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import cv2
 import numpy as np
 import numpy.typing as npt
 
 from particlebot.analysis.camera import Camera
-from particlebot.analysis.synthetic import SwarmFrame
+from particlebot.analysis.synthetic import R_MAX_CM, R_MIN_CM, SwarmFrame
 from particlebot.analysis.video import Image, VideoWriter
 from particlebot.fileio import atomic_open
 
@@ -45,6 +46,21 @@ class Stray:
     """A soft glare (Gaussian) instead of a sharp-edged spot."""
 
 
+@dataclass(frozen=True)
+class Stand:
+    """A desk lamp's foot on the floor and the arm rising from it to the head: solid, sharp-edged,
+    lit by the lamp itself, and as still as the head, so a tracker must keep them out of the
+    swarm."""
+
+    foot_cm: tuple[float, float]
+    """Centre of the round foot on the floor."""
+    foot_radius_cm: float = 9.0
+    arm_width_cm: float = 2.5
+    foot_level: float = 60.0
+    """Grey level of the foot's metal under the room's light (brightened by the lamp above)."""
+    arm_level: float = 110.0
+
+
 DEFAULT_STRAYS = (
     Stray(250.0, 20.0, 1.2, 200.0),
     Stray(30.0, 140.0, 0.8, 220.0),
@@ -60,6 +76,8 @@ class Scene:
     """The desk lamp's head (SI S3: 35 cm tall)."""
     lamp_radius_cm: float = 7.0
     """Radius of the lamp head as seen from above."""
+    stand: Stand | None = None
+    """The lamp's foot and arm; None draws the head alone (a lamp hung from above)."""
     lamp_strength: float = 3.0
     """The lamp's illuminance at its foot, in units of the room's light."""
     flare: float = 70.0
@@ -76,6 +94,19 @@ class Scene:
     """Brightness lost in the image corners."""
     strays: tuple[Stray, ...] = DEFAULT_STRAYS
     seed: int = 0
+    look: Literal["lab", "published"] = "lab"
+    """'lab': the real robots on a dark floor under the lamp (the parts, the glow, the optics
+    above). 'published': the published simulator's rendering, flat discs on a white floor
+    coloured by radius (PUBLISHED_DISC_BGR), with nothing else in view."""
+
+
+def published_disc_bgr(r_cm: float) -> tuple[float, float, float]:
+    """The published simulator's colour of a live particle of radius r (its updateCol_k): red 30,
+    green from 200 contracted to 20 expanded (squared), blue from 30 to 210 (square root)."""
+    span = R_MAX_CM - R_MIN_CM
+    shrink = min(max((R_MAX_CM - r_cm) / span, 0.0), 1.0)
+    grow = min(max((r_cm - R_MIN_CM) / span, 0.0), 1.0)
+    return (30.0 + 180.0 * math.sqrt(grow), 20.0 + 180.0 * shrink**2, 30.0)
 
 
 @dataclass(frozen=True)
@@ -130,6 +161,8 @@ class Renderer:
 
     def _make_background(self) -> Image:
         width, height = self.camera.image_size
+        if self.scene.look == "published":
+            return np.full((height, width, 3), 255, np.uint8)  # glColor3f(1, 1, 1)
         vv, uu = np.mgrid[0:height, 0:width].astype(np.float64)
         floor = self._floor_of_pixel.to_floor(np.stack([uu.ravel(), vv.ravel()], axis=1))
         fx, fy = floor[:, 0].reshape(height, width), floor[:, 1].reshape(height, width)
@@ -145,6 +178,12 @@ class Renderer:
             else:
                 edge = np.clip((stray.radius_cm - np.sqrt(d2)) / 0.3 + 0.5, 0, 1)
                 level = np.maximum(level, stray.level * edge)
+        stand = self.scene.stand
+        if stand is not None:
+            d = np.hypot(fx - stand.foot_cm[0], fy - stand.foot_cm[1])
+            inside = np.clip((stand.foot_radius_cm - d) / 0.3 + 0.5, 0, 1)
+            foot = stand.foot_level * self.lamp_light(*stand.foot_cm)
+            level = level * (1 - inside) + foot * inside
         grey = np.clip(level, 0, 255)
         # The blackout cloth is neutral; the lamp is yellow (more red and green than blue).
         tint = np.array([0.85, 1.0, 1.08])
@@ -187,6 +226,9 @@ class Renderer:
 
     def _draw_particle(self, canvas: Image, index: int, x: float, y: float, r: float) -> None:
         h = self.scene.particle_height_cm
+        if self.scene.look == "published":
+            self._fill(canvas, self._polygon(x, y, r, h), published_disc_bgr(r))
+            return
         light = float(self.lamp_light(x, y)) * self.scene.particle_level
 
         def colour(bgr: tuple[float, float, float]) -> tuple[float, ...]:
@@ -210,6 +252,18 @@ class Renderer:
             return
         x, y = self.scene.lamp_cm
         h, r = self.scene.lamp_height_cm, self.scene.lamp_radius_cm
+        stand = self.scene.stand
+        if stand is not None:
+            # The arm: a strip from the foot's middle (on the floor) to the head (h up), its
+            # ends projected at their own heights.
+            fx, fy = stand.foot_cm
+            along = np.array([x - fx, y - fy])
+            across = np.array([-along[1], along[0]]) / max(float(np.hypot(*along)), 1e-9)
+            half = across * stand.arm_width_cm / 2
+            foot, head = np.array([fx, fy]), np.array([x, y])
+            low = self._project([foot + half, foot - half], 0.0)
+            high = self._project([head - half, head + half], h)
+            self._fill(canvas, self._fixed(np.vstack([low, high])), (stand.arm_level,) * 3)
         self._fill(canvas, self._polygon(x, y, r, h), (150.0, 190.0, 205.0))
         self._fill(canvas, self._polygon(x, y, 0.6 * r, h), (255.0, 255.0, 255.0))
 
@@ -217,6 +271,8 @@ class Renderer:
         canvas = self._background.copy()
         for i, (x, y, r) in enumerate(zip(frame.x_cm, frame.y_cm, frame.r_cm, strict=True)):
             self._draw_particle(canvas, i, float(x), float(y), float(r))
+        if self.scene.look == "published":
+            return canvas
         self._draw_lamp(canvas)
         flare, gain = self._optics
         image = (canvas.astype(np.float32) + flare) * gain

@@ -83,6 +83,11 @@ class Overlay:
                 max(1, round(scale)),
                 cv2.LINE_AA,
             )
+        scenery = [
+            np.round((c.astype(np.float64) + 0.5) * factor - 0.5).astype(np.int32)
+            for c in tracker.scenery
+        ]
+        cv2.polylines(image, scenery, True, LAMP_BGR, max(1, round(scale)), cv2.LINE_AA)
         if len(self.trail_cm) > 1:
             trail = self.geometry.to_image(self.trail_cm)
             cv2.polylines(

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import cv2
 import numpy as np
@@ -82,6 +83,8 @@ class BlobSpec:
     duration_s: float = 60.0
     fps: float = 5.0
     seed: int = 1
+    layout: Literal["hex", "line"] = "hex"
+    """A compact hexagonal blob, or the particles in one row across the way to the lamp."""
     r_min_cm: float = R_MIN_CM
     r_max_cm: float = R_MAX_CM
 
@@ -110,10 +113,16 @@ def breathing_blob(spec: BlobSpec) -> list[SwarmFrame]:
     d_min = 2 * spec.r_min_cm
     start = np.asarray(spec.start_cm, dtype=np.float64)
     lamp = np.asarray(spec.lamp_cm, dtype=np.float64)
-    angle = rng.uniform(0, 2 * math.pi)
-    rotation = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
-    relative = (_hex_blob(spec.count) * d_min * 1.02) @ rotation.T
     toward = (lamp - start) / np.hypot(*(lamp - start))
+    if spec.layout == "line":
+        angle = math.atan2(toward[1], toward[0]) + math.pi / 2
+        row = np.stack([np.arange(spec.count) - (spec.count - 1) / 2, np.zeros(spec.count)], 1)
+        shape = row
+    else:
+        angle = rng.uniform(0, 2 * math.pi)
+        shape = _hex_blob(spec.count)
+    rotation = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    relative = (shape * d_min * 1.02) @ rotation.T
     # Slow wandering of the whole swarm (20-90 s) and of each particle (5-30 s): three
     # sinusoids each.
     swarm_phase = rng.uniform(0, 2 * math.pi, size=(2, 3))

@@ -28,7 +28,7 @@ import numpy.typing as npt
 
 from particlebot.analysis.geometry import FloorGeometry, GeometryError, polygon_area_centroid
 from particlebot.analysis.synthetic import R_MAX_CM, R_MIN_CM
-from particlebot.analysis.trackfile import OK, TrackRow
+from particlebot.analysis.trackfile import DROPPED, OK, TrackRow
 from particlebot.analysis.video import Image, VideoSource, as_image
 
 Contour = npt.NDArray[np.int32]
@@ -84,6 +84,14 @@ class TrackerSettings:
     """A centroid moving more than this (plus 1 cm/s) between good frames is flagged."""
     area_change: float = 0.4
     """An area this far (relative) from the recent frames' median is flagged."""
+    spike_cm: float = R_MAX_CM - R_MIN_CM + 1.0
+    """A centroid this far from the median of its written neighbours (two each side) is a
+    one-frame spike (noise, a glare joining for a frame) and is dropped. The region itself
+    sways as its particles breathe, by up to about a rim's travel (R_max - R_min: 3.9 cm
+    measured on the synthetic blob sampled every 2 s), hence that plus a centimetre."""
+    settle_frames: int = 3
+    """After this many consecutive frames that agree with each other but jump from the last good
+    one, the swarm is taken to be there (a cut in the video, a swarm that split)."""
 
     @property
     def merge_distance_cm(self) -> float:
@@ -116,7 +124,15 @@ class Detection:
     def quality(self) -> str:
         return "+".join(self.flags) if self.flags else OK
 
+    @property
+    def dropped(self) -> bool:
+        """Found, but not believed: its centroid is not written as the track."""
+        return bool(DROPPED & set(self.flags))
+
     def row(self) -> TrackRow:
+        """The frame as TRACK.csv has it: a dropped frame keeps its flags, not its centroid."""
+        if self.dropped:
+            return TrackRow(self.t_s, math.nan, math.nan, math.nan, self.quality, self.frame)
         return TrackRow(self.t_s, self.x_cm, self.y_cm, self.area_cm2, self.quality, self.frame)
 
 
@@ -149,6 +165,11 @@ class SwarmTracker:
         self._near_lamp: Mask | None = None
         self._last_ok: Detection | None = None
         self._recent_areas: deque[float] = deque(maxlen=25)
+        self._leaps: list[Detection] = []
+        self._scenery_ready = False
+        self.scenery: list[Contour] = []
+        """Outlines (processing pixels) of what the first frame showed beside the lamp that is
+        not the swarm (its foot and arm), masked from then on."""
 
     # -- preparation ------------------------------------------------------------------------------
 
@@ -287,9 +308,12 @@ class SwarmTracker:
         _, edges, bright = self.foreground(image)
         blocked = cv2.bitwise_or(self._lamp_mask, self._static_mask)
         edges[blocked > 0] = 0
-        # Brightness only fills in near edges (a dim particle's broken rim): the floor's glow
-        # and glare are bright too, but far from any sharp rim.
-        near_edges = cv2.dilate(edges, self._reach_kernel)
+        bright[blocked > 0] = 0
+        # Brightness only fills in between edges (a dim particle's broken rim): the floor's glow
+        # and a stray light's glare are bright too, but lie outside any sharp rim, so a closing
+        # (which does not grow past the rims' outer envelope) bounds it, where a dilation would
+        # let a glare beside the swarm add a fringe half a particle wide.
+        near_edges = cv2.morphologyEx(edges, cv2.MORPH_CLOSE, self._reach_kernel)
         foreground = cv2.bitwise_or(edges, cv2.bitwise_and(bright, near_edges))
         closed = cv2.morphologyEx(foreground, cv2.MORPH_CLOSE, self._close_kernel)
         # Only what has sharp rims is swarm: soft glare and the cloth's mottle stand out from
@@ -315,16 +339,72 @@ class SwarmTracker:
             return detection
         main = self._choose(pieces)
         chosen = [p for p in pieces if p is main or self._near(p[0], main[0])]
+        if not self._scenery_ready:
+            self._scenery_ready = True
+            if self._learn_scenery([c for c in contours if len(c) >= 3], chosen):
+                return self.detect(frame, t_s, index)
         total = sum(p[1] for p in chosen)
         detection.x_cm = sum(p[1] * p[2] for p in chosen) / total
         detection.y_cm = sum(p[1] * p[3] for p in chosen) / total
         detection.area_cm2 = total
         detection.outlines = [p[0] for p in chosen]
         self._judge(detection)
-        if not detection.flags:
-            self._last_ok = detection
-            self._recent_areas.append(total)
+        self._remember(detection)
         return detection
+
+    def _learn_scenery(
+        self, contours: Sequence[Contour], swarm: Sequence[tuple[Contour, float, float, float]]
+    ) -> bool:
+        """On the first frame: what stands beside the lamp's head and is not the swarm (the
+        lamp's foot, its arm, things on the floor under it) is scenery, masked from then on.
+        A lamp's arm is no longer than its height, so only regions that reach within that of the
+        head's floor point count; the swarm, which starts away from the lamp, keeps what it
+        touches. Returns whether anything was masked."""
+        if not self.lamps:
+            return False
+        s = self.settings
+        reach_cm = s.lamp_height_cm + s.particle_diameter_cm / 2
+        swarm_ids = {id(p[0]) for p in swarm}
+        grow_px = max(3, round(1.0 * self.px_per_cm) * 2 + 1)
+        grown = np.zeros_like(self._lamp_mask)
+        for contour in contours:
+            if id(contour) in swarm_ids:
+                continue
+            floor = self.geometry.to_floor(contour.reshape(-1, 2))
+            for lamp in self.lamps:
+                gap = np.hypot(floor[:, 0] - lamp.floor_cm[0], floor[:, 1] - lamp.floor_cm[1])
+                if float(gap.min()) < reach_cm:
+                    cv2.drawContours(grown, [contour], -1, 255, -1)
+                    break
+        if not grown.any():
+            return False
+        # The blurred rim of what is masked must not come back as edges.
+        grown = as_image(cv2.dilate(grown, np.ones((grow_px, grow_px), np.uint8)))
+        outlines, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        self.scenery = [np.asarray(c, np.int32) for c in outlines]
+        self._lamp_mask = as_image(cv2.bitwise_or(self._lamp_mask, grown))
+        self._near_lamp = None
+        return True
+
+    def _remember(self, detection: Detection) -> None:
+        """What the next frames are judged against: the last frame that did not leap (a frame
+        whose outline touches the lamp or the border still says where the swarm is), and the
+        areas of clean frames. A leap repeated settle_frames times in agreement is believed."""
+        if "jump" not in detection.flags:
+            self._leaps.clear()
+            if "area" not in detection.flags:
+                self._last_ok = detection
+            if not detection.flags:
+                self._recent_areas.append(detection.area_cm2)
+            return
+        self._leaps.append(detection)
+        if len(self._leaps) >= self.settings.settle_frames and all(
+            math.hypot(d.x_cm - detection.x_cm, d.y_cm - detection.y_cm) < self.settings.jump_cm
+            for d in self._leaps
+        ):
+            self._last_ok = detection
+            self._recent_areas.clear()
+            self._leaps.clear()
 
     def _choose(
         self, pieces: Sequence[tuple[Contour, float, float, float]]
@@ -394,6 +474,9 @@ class TrackResult:
     interrupted: bool = False
     """Ctrl-C stopped it; what was tracked until then is here."""
 
+    def dropped(self) -> list[Detection]:
+        return [d for d in self.detections if d.dropped]
+
     def counts(self) -> dict[str, int]:
         counts: dict[str, int] = {}
         for d in self.detections:
@@ -427,5 +510,24 @@ def track(
                 progress(index + 1)
     except KeyboardInterrupt:
         result.interrupted = True
+    flag_spikes(result.detections, tracker.settings.spike_cm)
     result.seconds = time.perf_counter() - started
     return result
+
+
+def flag_spikes(detections: Sequence[Detection], spike_cm: float, side: int = 2) -> None:
+    """Flags as 'spike' every found frame whose centroid lies further than spike_cm from the
+    median of its nearest undropped neighbours (up to `side` before and after): one frame that
+    noise or a glare pushed off, which the jump test (a swarm's top speed) lets through. The
+    median of both sides follows a swarm that turns or speeds up."""
+    kept = [d for d in detections if not d.dropped and math.isfinite(d.x_cm)]
+    points = np.array([(d.x_cm, d.y_cm) for d in kept]).reshape(-1, 2)
+    for k, detection in enumerate(kept):
+        before = np.arange(max(0, k - side), k)
+        after = np.arange(k + 1, min(len(kept), k + side + 1))
+        if not len(before) or not len(after):
+            continue  # a one-sided median cannot tell a swarm that moves from a spike
+        neighbours = np.concatenate([before, after])
+        centre = np.median(points[neighbours], axis=0)
+        if math.dist(points[k], centre) > spike_cm:
+            detection.flags.append("spike")

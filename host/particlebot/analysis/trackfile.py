@@ -2,8 +2,8 @@
 it came from, then t_s, x_cm, y_cm, area_cm2, quality, frame.
 
 x_cm and y_cm are floor centimetres from the field's top-left corner, y down the image; quality
-is `ok` or flags joined by `+` (QUALITY_FLAGS says what each means); a lost frame has empty
-coordinates.
+is `ok` or flags joined by `+` (QUALITY_FLAGS says what each means); a lost frame, and one whose
+flags say it was dropped (DROPPED), has empty coordinates.
 """
 
 from __future__ import annotations
@@ -30,9 +30,12 @@ QUALITY_FLAGS = {
     "lost": "no swarm region found",
     "edge": "the region touches the image border: part of the swarm may be out of view",
     "lamp": "the region touches the lamp's mask: its outline may be cut there",
-    "area": "the region's area jumped against the recent frames (merged or lost a part)",
-    "jump": "the centroid moved further since the last good frame than a swarm can",
+    "area": "the region's area jumped against the recent frames (merged or lost a part): dropped",
+    "jump": "the centroid moved further since the last good frame than a swarm can: dropped",
+    "spike": "the centroid stood apart from its neighbours' median for one frame: dropped",
 }
+# Flags whose frame is not believed: its row keeps the flags and leaves the coordinates empty.
+DROPPED = frozenset({"area", "jump", "spike"})
 
 
 class TrackFormatError(ParticlebotError, ValueError):

@@ -104,6 +104,12 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
         type=float_arg(LENGTH_CM),
         help="contracted diameter (default: the firmware's R_min x 2 = 15.5)",
     )
+    what.add_argument(
+        "--spike-cm",
+        type=float,
+        help="drop a frame whose centroid lies this far from its neighbours' median "
+        "(default: R_max - R_min + 1 = 5 cm, past the region's breathing sway)",
+    )
     out = track.add_argument_group("pictures")
     out.add_argument("--sheet", help="contact sheet PNG (default: VIDEO.sheet.png)")
     out.add_argument("--no-sheet", action="store_true", help="write no contact sheet")
@@ -176,6 +182,10 @@ def _settings(args: argparse.Namespace) -> TrackerSettings:
         options["lamp"] = "none"
     elif args.lamp != "auto":
         options["lamp"] = _circle(args.lamp, "--lamp", default_radius=15.0)
+    if args.spike_cm is not None:
+        if not (math.isfinite(args.spike_cm) and args.spike_cm > 0):
+            raise ValueError("--spike-cm must be a positive number of cm")
+        options["spike_cm"] = args.spike_cm
     if args.particle_diameter_cm is not None:
         if args.particle_diameter_cm <= 0:
             raise ValueError("--particle-diameter-cm must be positive")
@@ -207,9 +217,18 @@ def _metadata(
             meta["other_lamps_cm"] = "; ".join(
                 f"{lamp.floor_cm[0]:.1f},{lamp.floor_cm[1]:.1f}" for lamp in lamps[1:]
             )
+    dropped = result.dropped()
+    meta["dropped"] = _dropped_text(dropped) if dropped else "none"
     for flag, meaning in QUALITY_FLAGS.items():
         meta[f"quality {flag}"] = meaning
     return meta
+
+
+def _dropped_text(dropped: list[Detection]) -> str:
+    """'3 frames, coordinates left empty: 120 (jump), 121 (jump), 300 (spike)'."""
+    listed = ", ".join(f"{d.frame} ({d.quality})" for d in dropped[:50])
+    more = f", and {len(dropped) - 50} more" if len(dropped) > 50 else ""
+    return f"{len(dropped)} frames, coordinates left empty: {listed}{more}"
 
 
 def _track(
@@ -275,6 +294,9 @@ def _track(
         f"Track: {output} ({rows} frames analysed: {counts}; "
         f"{rows / max(result.seconds, 1e-9):.0f} frames/s)"
     )
+    dropped = result.dropped()
+    if dropped:
+        print(f"Dropped (not written as the track): {_dropped_text(dropped)}")
     if result.lamps:
         x, y = result.lamps[0].floor_cm
         print(f"Lamp: ({x:.1f}, {y:.1f}) cm")

@@ -94,6 +94,11 @@ class Metric:
     key: str
     label: str
     decimals: int
+    derived_from: str | None = None
+    """Read from another metric of the same run instead of measured: that metric's key..."""
+    factor: Callable[[int], float] | None = None
+    """...times this factor of the swarm's size. Derived at report time, so runs finished
+    before the metric existed have it too."""
 
 
 @dataclass(frozen=True)
@@ -106,6 +111,8 @@ class PublishedTable:
     values: Mapping[tuple[int, float], Published]
     convert: Callable[[float], float] = float
     decimals: int = 2
+    metric: str | None = None
+    """The metric the table shows: None for the study's headline."""
 
 
 @dataclass(frozen=True)
@@ -287,6 +294,28 @@ def _fraction_sweep(key: str, flag: str, label: str, high: float, what: str) -> 
 
 
 _SPEED = Metric("speed_mm_s", "speed toward the light (mm/s)", 2)
+_SPEED_PAPER_CAMERA = Metric(
+    "speed_paper_camera_mm_s",
+    "speed toward the light through the paper's camera (mm/s)",
+    2,
+    derived_from="speed_mm_s",
+    factor=paper.paper_camera_factor,
+)
+"""The speed as the paper would have read it from the published simulator's videos with one
+pixel scale for every swarm size (studies.published.paper_camera_factor; docs/studies-camera.md)."""
+
+
+def _paper_camera_table(
+    title: str, values: Mapping[tuple[int, float], Published]
+) -> PublishedTable:
+    return PublishedTable(
+        f"{title} through the paper's camera (one pixel scale, the 1,000-particle camera's)",
+        "mm/s",
+        values,
+        metric=_SPEED_PAPER_CAMERA.key,
+    )
+
+
 _TWO_HOURS = 7200.0
 _HALF_HOUR = 1800.0
 
@@ -300,7 +329,7 @@ STUDIES: dict[str, Study] = {
             sweep=_fraction_sweep(
                 "dead_fraction", "--fractions", "dead particles (%)", 0.99, "a fraction in [0, 1)"
             ),
-            metrics=(_SPEED,),
+            metrics=(_SPEED, _SPEED_PAPER_CAMERA),
             default=Preset(
                 paper.DEAD_SIZES, paper.DEAD_FRACTIONS, 11, _TWO_HOURS, _HALF_HOUR
             ),
@@ -312,6 +341,7 @@ STUDIES: dict[str, Study] = {
                     "Table S4", "% of the minimum diameter per 12 s cycle",
                     _flatten(paper.TABLE_S4_PERCENT), paper.speed_to_percent_diameter_per_cycle,
                 ),
+                _paper_camera_table("Table S3", _flatten(paper.TABLE_S3_MM_S)),
             ),
             finding="speed falls as particles die, to a standstill by 60-80 % dead",
             uses_skip=True,
@@ -406,7 +436,7 @@ STUDIES: dict[str, Study] = {
             title="Speed against swarm size",
             source="SI S9, Table S3 (0 % dead)",
             sweep=None,
-            metrics=(_SPEED,),
+            metrics=(_SPEED, _SPEED_PAPER_CAMERA),
             default=Preset(
                 (10, 30, 100, 300, 1000, 3000, 10000), (0.0,), 11, _TWO_HOURS, _HALF_HOUR
             ),
@@ -415,6 +445,10 @@ STUDIES: dict[str, Study] = {
             tables=(
                 PublishedTable(
                     "Table S3, 0 % dead", "mm/s",
+                    {(n, 0.0): row[0.0] for n, row in paper.TABLE_S3_MM_S.items()},
+                ),
+                _paper_camera_table(
+                    "Table S3, 0 % dead",
                     {(n, 0.0): row[0.0] for n, row in paper.TABLE_S3_MM_S.items()},
                 ),
             ),

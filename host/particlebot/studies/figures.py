@@ -21,14 +21,17 @@ from particlebot.studies.report import CellStats
 def plot_study(study: Study, stats: Sequence[CellStats], path: Path, note: str = "") -> Path:
     """The headline metric against the sweep (against N where there is none), one line per swarm
     size with its ±1 sd band; the paper's published values as points with error bars in the same
-    colour (Table S3 and S4 studies), or its stated findings (Fig. S20)."""
+    colour (Table S3 and S4 studies), or its stated findings (Fig. S20). A reading of the
+    headline (the speed through the paper's camera) is a dashed line in its size's colour."""
     cells = [c for c in stats if c.metric == study.metric.key and c.values]
+    readings = {m.key for m in study.metrics if m.derived_from == study.metric.key}
+    read = [c for c in stats if c.metric in readings and c.values]
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     published = study.tables[0].values
     if study.sweep is None:
-        _against_size(ax, cells, published)
+        _against_size(ax, cells, published, read)
     else:
-        _against_sweep(ax, study, cells)
+        _against_sweep(ax, study, cells, read)
     ax.axhline(0.0, color="0.6", linewidth=0.8, zorder=0)
     ax.set_ylabel(study.metric.label)
     ax.set_title(f"{study.title} ({study.source})" + (f"\n{note}" if note else ""), fontsize=10)
@@ -66,7 +69,17 @@ def _paper_points(
     )
 
 
-def _against_sweep(ax: plt.Axes, study: Study, cells: Sequence[CellStats]) -> None:
+def _reading(
+    ax: plt.Axes, x: np.ndarray, row: Sequence[CellStats], colour: str, label: str | None
+) -> None:
+    """A derived reading of the headline (its cells in the same order as x), dashed."""
+    if len(row) == len(x):
+        ax.plot(x, [c.mean for c in row], linestyle="--", color=colour, label=label)
+
+
+def _against_sweep(
+    ax: plt.Axes, study: Study, cells: Sequence[CellStats], read: Sequence[CellStats] = ()
+) -> None:
     sweep = study.sweep
     assert sweep is not None
     table = study.tables[0].values
@@ -79,6 +92,8 @@ def _against_sweep(ax: plt.Axes, study: Study, cells: Sequence[CellStats]) -> No
         means = np.array([c.mean for c in row])
         sds = np.nan_to_num(np.array([c.sd for c in row]))
         colour = _band(ax, x, means, sds, f"{n:,} particles")
+        mine = sorted((c for c in read if c.particles == n), key=lambda c: c.value)
+        _reading(ax, x, mine, colour, f"{n:,}, through the paper's camera" if mine else None)
         # The paper's points where we ran, nudged sideways per size so bars do not hide bands.
         nudge = (index - (len(sizes) - 1) / 2) * 0.012 * span
         points = sorted(
@@ -118,7 +133,10 @@ def _noise_findings(ax: plt.Axes, row: Sequence[CellStats], colour: str, labelle
 
 
 def _against_size(
-    ax: plt.Axes, cells: Sequence[CellStats], published: Mapping[tuple[int, float], Published]
+    ax: plt.Axes,
+    cells: Sequence[CellStats],
+    published: Mapping[tuple[int, float], Published],
+    read: Sequence[CellStats] = (),
 ) -> None:
     row = sorted(cells, key=lambda c: c.particles)
     x = np.array([float(c.particles) for c in row])
@@ -129,6 +147,8 @@ def _against_size(
         np.nan_to_num(np.array([c.sd for c in row])),
         "ours",
     )
+    mine = sorted(read, key=lambda c: c.particles)
+    _reading(ax, x, mine, colour, "ours through the paper's camera" if mine else None)
     ran = {c.particles for c in cells}
     points = sorted((float(n), p) for (n, _), p in published.items() if n in ran)
     _paper_points(ax, points, colour, "paper")

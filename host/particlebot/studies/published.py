@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 # ---- the published model's numbers the studies are defined in ---------------------------------
@@ -19,6 +20,47 @@ CYCLE_S = 12.0
 """One expansion-contraction cycle of the published controller, (Nx + 1) x rise period (s)."""
 DT_S = 0.01
 """The published time step (s): used to estimate a run's cost in particle-steps."""
+
+
+# ---- the published simulator's rendering camera -------------------------------------------------
+# Its first commit's main.cpp sets, per swarm size, a densest-packing diameter and a light factor,
+# then hangs the camera at their product straight above the world's origin, and renders a
+# 60-degree (vertical) perspective at 1920x1080. docs/studies-camera.md tests the hypothesis that
+# Table S3 was read from these videos with one pixel scale, the 1,000-particle camera's.
+
+CAMERA_RULE: tuple[tuple[int, float, float], ...] = (
+    (11, 0.591, 16.0),
+    (101, 1.718, 8.0),
+    (1001, 5.264, 4.0),
+    (10001, 16.449, 2.0),
+)
+"""(largest N, densest-packing diameter m, light factor): camera height = diameter x factor."""
+CAMERA_IMAGE_SIZE = (1920, 1080)
+CAMERA_FIELD_OF_VIEW_DEG = 60.0
+"""gluPerspective(60.0, w / h, ...): the vertical field of view."""
+ONE_SCALE_PARTICLES = 1000
+"""The swarm size whose camera's pixel scale the hypothesis takes for every size."""
+
+
+def camera_height_m(particles: int) -> float:
+    """The published rendering camera's height for a swarm of that size (m): 9.46, 13.74, 21.06
+    or 32.90."""
+    for largest, diameter_m, factor in CAMERA_RULE:
+        if particles <= largest:
+            return diameter_m * factor
+    raise ValueError(f"the published simulator has no camera for {particles} particles")
+
+
+def camera_px_per_m(height_m: float) -> float:
+    """Pixels per metre of floor seen straight down from that height (935 / height)."""
+    half_height = CAMERA_IMAGE_SIZE[1] / 2
+    return half_height / math.tan(math.radians(CAMERA_FIELD_OF_VIEW_DEG / 2)) / height_m
+
+
+def paper_camera_factor(particles: int) -> float:
+    """What one pixel scale (the 1,000-particle camera's) multiplies a true length or speed by
+    for a swarm of that size: 21.06 / its camera's height (x2.23, x1.53, x1, x0.64)."""
+    return camera_height_m(ONE_SCALE_PARTICLES) / camera_height_m(particles)
 
 
 def speed_to_percent_diameter_per_cycle(speed_mm_s: float) -> float:

@@ -72,6 +72,9 @@ def collect(
         for metric in study.metrics:
             if metric.key in record.metrics:
                 values[(*cell, metric.key)].append((spec.seed, record.metrics[metric.key]))
+            elif metric.derived_from in record.metrics and metric.factor is not None:
+                value = record.metrics[metric.derived_from] * metric.factor(cell[0])
+                values[(*cell, metric.key)].append((spec.seed, value))
     stats = []
     for (n, value), count in planned.items():
         for metric in study.metrics:
@@ -90,7 +93,10 @@ def csv_text(study: Study, stats: Iterable[CellStats]) -> str:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     sweep = study.sweep.key if study.sweep is not None else None
-    published = study.tables[0].values
+    # The paper's value beside each metric a table shows (the headline's: the first table's).
+    published: dict[str, Mapping[tuple[int, float], Published]] = {}
+    for table in study.tables:
+        published.setdefault(table.metric or study.metric.key, table.values)
     writer.writerow(
         [
             "particles",
@@ -100,9 +106,7 @@ def csv_text(study: Study, stats: Iterable[CellStats]) -> str:
         ]
     )
     for cell in stats:
-        ref = (
-            published.get((cell.particles, cell.value)) if cell.metric == study.metric.key else None
-        )
+        ref = published.get(cell.metric, {}).get((cell.particles, cell.value))
         band = "" if ref is None or not cell.values else str(within_band(cell.mean, ref)).lower()
         writer.writerow(
             [
@@ -151,7 +155,8 @@ def markdown(
         "",
     ]
     for table in study.tables:
-        lines += _table(study, table, headline)
+        shown = table.metric or study.metric.key
+        lines += _table(study, table, [cell for cell in stats if cell.metric == shown])
     lines += ["## Finding", "", f"Paper: {study.finding}.", ""]
     lines += [f"Ours: {line}" for line in FINDINGS.get(study.name, _no_finding)(study, stats)]
     lines.append("")
@@ -169,7 +174,8 @@ def _table(study: Study, table: PublishedTable, headline: Sequence[CellStats]) -
     columns = sorted({cell.value for cell in headline})
     by_cell = {(cell.particles, cell.value): cell for cell in headline}
     has_paper = any(key in table.values for key in by_cell)
-    lines = [f"## {table.title}: {study.metric.label.split(' (')[0]} ({table.unit})", ""]
+    label = next((m.label for m in study.metrics if m.key == table.metric), study.metric.label)
+    lines = [f"## {table.title}: {label.split(' (')[0]} ({table.unit})", ""]
     if study.sweep is not None:
         lines += [f"Columns: {study.sweep.label}.", ""]
     if has_paper:

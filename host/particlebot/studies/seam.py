@@ -121,7 +121,7 @@ def frame(setup: WorldSetup) -> Framed:
         physics=physics,
         controller=ControllerSpec(kind=controller, published=published),
         dead=DeadSpec(count=setup.dead, at_s=setup.dead_at_s, detach=setup.detach_dead),
-        output=OutputSpec(dump_interval_s=track_interval_s(setup)),
+        output=OutputSpec(dump_interval_s=track_interval_s(setup), per_particle=setup.per_particle),
     )
     placement = place_swarm(base)
     xy = placement.xy

@@ -90,6 +90,9 @@ class WorldSetup:
     """Rows of the centroid track (the published CSV's interval) at most this far apart: a run
     whose duration is not a multiple of it gets rows a little closer, so that the last row is
     the run's end (a 20 s run would otherwise leave only its start to measure)."""
+    per_particle: bool = False
+    """Every particle's position and radius in each CSV row (the published `testing 1`): what
+    filming the run needs (studies.camera)."""
     overrides: tuple[tuple[str, float], ...] = ()
     """Published numbers changed for this run, (name, value) pairs: fields of the world's
     PhysicsParams (static_factor, shear, magnet_cutoff, ...) and the published controller's

@@ -2,7 +2,7 @@
 the published simulator drew them, track them every 30 s and read the speed with one pixel scale.
 
     PYTHONPATH=host python research/paper_camera.py --cells 10:0,100:0 --seeds 1-11 \
-        --results studies/results/camera
+        --results data/studies/camera
 
 Resumable: rows already in RESULTS/camera-runs.csv are not run again.
 """
@@ -22,7 +22,7 @@ def main() -> int:
     parser.add_argument("--seeds", default="1-11", help="FIRST-LAST (1-11)")
     parser.add_argument("--duration-s", type=float, default=7200.0, help="simulated (7200)")
     parser.add_argument("--skip-s", type=float, default=1800.0, help="left out (1800)")
-    parser.add_argument("--results", default="studies/results/camera", help="output folder")
+    parser.add_argument("--results", default="data/studies/camera", help="output folder")
     parser.add_argument("--runs", help="the runs' folders (default RESULTS/runs; large)")
     args = parser.parse_args()
     try:

@@ -4,11 +4,11 @@ runs of research/paper_camera.py; a CSV, a figure and the markdown tables of
 docs/studies-camera.md.
 
     PYTHONPATH=host python research/paper_camera_report.py \
-        --summary docs/studies/dead-10-100.csv --summary docs/studies/dead-10-100-high.csv \
-        --summary docs/studies/dead-1000.csv --summary docs/studies/dead-1000-high.csv \
-        --summary docs/studies/dead-10000-pooled.csv \
-        --filmed studies/results/camera/camera-runs.csv \
-        --out studies/results/camera --figure docs/studies-camera.png
+        --summary data/studies/dead-10-100.csv --summary data/studies/dead-10-100-high.csv \
+        --summary data/studies/dead-1000.csv --summary data/studies/dead-1000-high.csv \
+        --summary data/studies/dead-10000-pooled.csv \
+        --filmed data/studies/camera/camera-runs.csv \
+        --out data/studies/camera --figure docs/studies/camera.png
 """
 
 from __future__ import annotations

@@ -24,8 +24,9 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         "radio",  # radios, real and simulated (a simulated radio drives sim)
         "session",  # frames over a radio
         "logs",  # session logs, replayed as a radio
-        "swarm plots provision studies",  # the base station's model; figures; flashing; studies
+        "swarm plots provision",  # the base station's model; figures; flashing
         "analysis console",  # tracks, videos and statistics; the console UI
+        "studies",  # the paper's studies (filming runs reads them with the tracker)
         "experiments",  # scripted experiments on a swarm
         "calibration",  # the calibration bench
         "__init__",  # the package's public names (and its version)

@@ -28,9 +28,9 @@ import numpy as np
 
 from particlebot.analysis.camera import Camera
 from particlebot.analysis.render import Renderer, Scene
-from particlebot.analysis.simcsv import PublishedRun, read_published_csv
 from particlebot.analysis.synthetic import Placement, frames_from_run
 from particlebot.analysis.tracker import SwarmTracker, TrackerSettings, flag_spikes
+from particlebot.sim.runs.simcsv import PublishedRun, read_published_csv
 from particlebot.studies.published import (
     CAMERA_IMAGE_SIZE,
     D_MIN_M,

@@ -39,8 +39,9 @@ class BuildNativeLibrary(build_ext):
         return os.path.join(*fullname.split(".")[:-1], "libparticle.so")
 
     def build_extension(self, ext: Extension) -> None:
-        if self.editable_mode:  # a clone's editable install loads build/native (`make native`)
-            return
+        # An editable install builds it too (setuptools then copies it beside the sources, where
+        # git ignores it), though a clone loads build/native first (`make native`): setuptools
+        # fails an editable install whose extension left no file.
         target = Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
         compiler = shlex.split(os.environ.get("CXX", "c++"))

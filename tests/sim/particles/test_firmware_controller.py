@@ -318,9 +318,9 @@ def test_method_a_ranks_spread_by_the_noise_once_rounded_to_counts() -> None:
         ({"cycle_steps": 5}, "cycle_steps = 5 is outside 10..3000"),
         ({"wave_size": 256}, "wave_size = 256 is outside 0..255"),
         ({"update_interval_s": 9}, "update_interval_s = 9 is outside 10..3600"),
-        ({"noise_diameters": -0.5}, "noise_diameters must be >= 0"),
-        ({"noise_diameters": math.nan}, "noise_diameters must be >= 0"),
-        ({"start_s": math.inf}, "start_s must be >= 0"),
+        ({"noise_diameters": -0.5}, "noise_diameters must be a number 0..1e+06, not -0.5"),
+        ({"noise_diameters": math.nan}, "noise_diameters must be a number 0..1e+06, not nan"),
+        ({"start_s": math.inf}, "start_s must be a number 0..1e+08, not inf"),
         ({"method": 2}, "method must be one of DIRECT, LINEAR, NONLINEAR, COUNTING"),
     ],
 )

@@ -5,7 +5,7 @@
 
 Each swarm is a blob (SI Algorithm 5) 1.5 m from the lamp, STARTed with method A at T = 3 s; the
 clock runs from the end of the estimation round, so every particle cycles or pauses on its wave.
-Goals (issue 8): 10 virtual particles at least 50x real time, 5 emulated at least 2x.
+Goals: 10 virtual particles at least 50x real time, 5 emulated at least 2x.
 
 On a shared machine the wall-clock figure depends on who else runs, so each line also gives the
 CPU time the swarm used (this process and its simavr children) per simulated second, and the

@@ -1,5 +1,5 @@
 """The swarm knows who is in it: STOP after a restart at 50 % loss, duplicate ids, renamed
-particles, the fleet file's roster (issue 11), on virtual particles through the Swarm API."""
+particles, the fleet file's roster, on virtual particles through the Swarm API."""
 
 from __future__ import annotations
 

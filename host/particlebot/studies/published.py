@@ -191,7 +191,7 @@ FIG_S18_FINDING = (
 CARRY_SIZES = (10, 100, 1000, 10000)
 CARRY_RADIUS_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
 """Object radius as a fraction of the DPD. The SI's text says radius, Fig. S19's caption says
-diameter; the studies follow the text (and issue 9)."""
+diameter; the studies follow the text."""
 FIG_S19_CYCLES = 3000
 FIG_S19_FINDING = (
     "10 and 100 particles cannot move the object; 1,000 carry it a significant distance but leave "

@@ -59,8 +59,8 @@ def temporary_beside(path: Path) -> Path:
         handle, name = tempfile.mkstemp(
             dir=folder, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}"
         )
-    except OSError as exc:
-        raise cannot_write(path, exc) from None
+    except OSError as exc:  # the temporary's name is ours, not the user's: name the target
+        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from None
     os.close(handle)
     return Path(name)
 

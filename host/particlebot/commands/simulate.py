@@ -237,7 +237,6 @@ def run(args: argparse.Namespace) -> int:
             folder = Path(args.resume)
             check_run_folder(folder)
             prepare_kernels()
-            print(f"resuming {folder}", file=sys.stderr)
             session = Run.resume(
                 folder,
                 record_video=args.video,
@@ -245,6 +244,8 @@ def run(args: argparse.Namespace) -> int:
                 trajectory=_trajectory(args),
                 device=args.device,
             )
+            # Said once the folder has been read: a folder that cannot go on is one line alone.
+            print(f"resuming {folder} at {session.world.t:g} s", file=sys.stderr)
             for note in session.notes:
                 print(f"note: {note}", file=sys.stderr)
         else:

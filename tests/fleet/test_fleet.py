@@ -126,7 +126,11 @@ def test_a_write_that_fails_halfway_leaves_the_old_file_whole(
         raise OSError("power cut")
 
     monkeypatch.setattr(fleet_store.os, "replace", power_cut)
-    with pytest.raises(OSError, match="power cut"), updating_fleet(path) as fleet:
+    # One line naming the file and the reason (FleetFileError), and the old file kept whole.
+    with (
+        pytest.raises(FleetFileError, match="cannot write .*fleet.toml: power cut"),
+        updating_fleet(path) as fleet,
+    ):
         fleet.record(ParticleRecord(7))
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["fleet.toml"]

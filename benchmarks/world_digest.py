@@ -20,6 +20,7 @@ import math
 import sys
 from typing import Any
 
+import numba
 import numpy as np
 
 from particlebot.sim.particles.model.published import PublishedController
@@ -56,6 +57,9 @@ def case(name: str, count: int, steps: int, physics: dict[str, Any], **options: 
     world = World(
         x, y, controller=PublishedController(), params=params, lamp=lamp, seed=1, **options
     )
+    # Pinned to numba's count (NUMBA_NUM_THREADS), so that a busy machine's thread choice does
+    # not quietly run "two threads" on one.
+    world.thread_count = numba.get_num_threads()
     world.step(steps)
     print(
         f"{name:8s} n={count} steps={steps} rebuilds={world.rebuilds} "

@@ -128,7 +128,7 @@ def test_a_write_that_fails_halfway_leaves_the_old_file_whole(
     monkeypatch.setattr(fleet_store.os, "replace", power_cut)
     # One line naming the file and the reason (FleetFileError), and the old file kept whole.
     with (
-        pytest.raises(FleetFileError, match="cannot write .*fleet.toml: power cut"),
+        pytest.raises(FleetFileError, match=r"cannot write .*fleet\.toml: power cut"),
         updating_fleet(path) as fleet,
     ):
         fleet.record(ParticleRecord(7))

@@ -20,7 +20,7 @@ help:
 	@echo "make demo      set everything up and run a virtual swarm at a lamp in the console"
 	@echo "make test      set everything up and run every check (lint, C++ tests, pytest, simavr)"
 	@echo "make check     the fast tier for the edit-test loop: C++ tests and pytest without the"
-	@echo "               simavr, dask, e2e and slow tiers (about a minute)"
+	@echo "               simavr, dask, e2e and slow tiers (under 3 minutes)"
 	@echo "make firmware  build build/firmware/particle.elf and .hex with Debian's avr-gcc"
 	@echo "make bench     run the benchmarks in benchmarks/ whose figures the performance page reports"
 	@echo "make docs      build the documentation site into build/site (open build/site/index.html)"

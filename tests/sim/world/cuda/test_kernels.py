@@ -145,3 +145,27 @@ def test_the_firmware_controller_commands_through_the_host_to_the_same_bits() ->
     gpu.step(25)
     assert (gpu.radii() > R_MIN).any()  # it actuated
     _same_bits(cpu, gpu)
+
+
+@pytest.mark.parametrize("shape", ["blob", "line"])
+def test_every_pair_within_reach_acts_once_in_a_grid_that_wraps(shape: str) -> None:
+    # 60 particles: a squeezed blob over many cells, or a line of touching discs 10 m long that
+    # wraps the swarm's 8 x 8 grid several times. One step: every particle's velocity (the sum
+    # of all its pairs) equals the CPU's up to the order of the sums, none missing or doubled.
+    from tests.sim.world.conftest import cluster
+
+    rng = np.random.default_rng(4)
+    if shape == "blob":
+        x, y = cluster(60, seed=4, gap=-0.002)
+    else:  # uneven overlaps and a zigzag, so that no particle's forces cancel
+        x = np.cumsum(np.full(60, 2 * R_MIN) - rng.uniform(0.0, 0.004, 60)) - 4.5
+        y = rng.uniform(-0.002, 0.002, 60)
+    cpu, gpu = _pair(x=x, y=y, controller=PublishedController(), seed=1,
+                     params=physics(friction=False))  # fmt: skip
+    cpu.step(1)
+    gpu.step(1)
+    a, b = cpu.state(), gpu.state()
+    assert np.abs(a.vx).max() > 0.0
+    scale = np.abs(a.vx).max() + np.abs(a.vy).max()
+    assert np.abs(a.vx - b.vx).max() < 1e-12 * scale
+    assert np.abs(a.vy - b.vy).max() < 1e-12 * scale

@@ -30,12 +30,15 @@ def test_a_filmed_run_reads_its_true_speed_times_the_one_scale_factor(tmp_path: 
     true, tracked, camera = (
         float(row[k]) for k in ("true_mm_s", "tracked_mm_s", "paper_camera_mm_s")
     )
-    assert int(row["frames"]) == 21 and row["dropped"] == "0"
+    # A frame or two may be dropped as a spike: whether one is depends on the last bits of the
+    # world's path, which another CPU target (no FMA, say) changes.
+    assert int(row["frames"]) == 21 and int(row["dropped"]) <= 2
     # The tracked region's centroid follows the particles' mean: the same speed to a few % over
     # 8 minutes (the region leans toward expanded particles by up to a few cm).
     assert tracked == pytest.approx(true, rel=0.1)
     # One scale for every size: the 10-particle camera's pixels read 2.23 times too long.
-    assert camera == pytest.approx(tracked * paper_camera_factor(10), rel=1e-6)
+    # (The row holds each speed to 6 significant digits, so the product agrees to ~1e-5.)
+    assert camera == pytest.approx(tracked * paper_camera_factor(10), rel=1e-5)
     assert "paper camera" in lines[0]
     # Rows already measured are not run again.
     again = film_dead_runs([(10, 0.0)], range(1, 2), 600.0, 120.0, tmp_path, say=lines.append)

@@ -21,6 +21,7 @@ from typing import IO
 from particlebot import resources
 from particlebot.closing import ClosedOnExit
 from particlebot.errors import ParticlebotError
+from particlebot.fileio import atomic_path
 from particlebot.sim.clock import CPU_HZ
 
 SENSOR_COUNT = 6
@@ -84,15 +85,15 @@ def ensure_harness(path: Path | None = None) -> Path:
 
     # simavr's headers as system headers, so that warnings judge only our code (as the Makefile).
     includes = [w for i in pkg_config("--cflags-only-I") for w in ("-isystem", i[2:])]
-    # Built beside its final name and renamed, so that a parallel first use never runs half a file.
-    partial = path.with_name(f"{path.name}.{os.getpid()}.partial")
-    command = ["gcc", "-std=gnu11", "-O2", *includes, "-o", str(partial)]
-    command += [str(resources.HARNESS_SOURCE), *pkg_config("--libs"), "-lelf"]
-    result = subprocess.run(command, capture_output=True, text=True, check=False)
-    if result.returncode != 0:
-        last = (result.stderr.strip().splitlines() or ["(no output)"])[-1]
-        raise HarnessBuildError(f"building the simavr harness failed: {last}")
-    partial.replace(path)
+    # Built beside its final name and renamed (fileio), so that a parallel first use never runs
+    # half a file and a failed build leaves nothing behind.
+    with atomic_path(path, mode=0o755) as partial:
+        command = ["gcc", "-std=gnu11", "-O2", *includes, "-o", str(partial)]
+        command += [str(resources.HARNESS_SOURCE), *pkg_config("--libs"), "-lelf"]
+        result = subprocess.run(command, capture_output=True, text=True, check=False)
+        if result.returncode != 0:
+            last = (result.stderr.strip().splitlines() or ["(no output)"])[-1]
+            raise HarnessBuildError(f"building the simavr harness failed: {last}")
     return path
 
 

@@ -106,7 +106,7 @@ def add_arguments(track: argparse.ArgumentParser) -> None:
     )
     what.add_argument(
         "--spike-cm",
-        type=float,
+        type=float_arg(LENGTH_CM),
         help="drop a frame whose centroid lies this far from its neighbours' median "
         "(default: R_max - R_min + 1 = 5 cm, past the region's breathing sway)",
     )
@@ -183,8 +183,6 @@ def _settings(args: argparse.Namespace) -> TrackerSettings:
     elif args.lamp != "auto":
         options["lamp"] = _circle(args.lamp, "--lamp", default_radius=15.0)
     if args.spike_cm is not None:
-        if not (math.isfinite(args.spike_cm) and args.spike_cm > 0):
-            raise ValueError("--spike-cm must be a positive number of cm")
         options["spike_cm"] = args.spike_cm
     if args.particle_diameter_cm is not None:
         if args.particle_diameter_cm <= 0:

@@ -184,9 +184,7 @@ def _settings(args: argparse.Namespace) -> TrackerSettings:
         options["lamp"] = _circle(args.lamp, "--lamp", default_radius=15.0)
     if args.spike_cm is not None:
         options["spike_cm"] = args.spike_cm
-    if args.particle_diameter_cm is not None:
-        if args.particle_diameter_cm <= 0:
-            raise ValueError("--particle-diameter-cm must be positive")
+    if args.particle_diameter_cm is not None:  # (its parser refuses what is not > 0)
         options["particle_diameter_cm"] = args.particle_diameter_cm
     return TrackerSettings(**options)
 

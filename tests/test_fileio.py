@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from particlebot.fileio import atomic_open, atomic_path, write_bytes, write_text
+from particlebot.fileio import atomic_open, atomic_path, finished_files, write_bytes, write_text
 
 
 class WriterError(Exception):
@@ -40,9 +40,12 @@ def test_a_new_file_does_not_appear_until_it_is_whole(tmp_path: Path) -> None:
     with atomic_open(target) as stream:
         stream.write("t,x,y\n")
         assert not target.exists()
-        # The temporary file hides from the globs outputs are found by.
-        assert list(tmp_path.glob("[a-z]*.csv")) == []
+        # pathlib's "*.csv" sees the temporary (a dot-file); finished_files does not.
+        assert [p.name for p in tmp_path.glob("*.csv")] != []
+        assert finished_files(tmp_path, "*.csv") == []
     assert target.read_text() == "t,x,y\n"
+    assert finished_files(tmp_path, "*.csv") == [target]
+    assert finished_files(tmp_path / "absent", "*.csv") == []
 
 
 def test_atomic_path_keeps_the_suffix_for_writers_that_choose_a_format_by_it(

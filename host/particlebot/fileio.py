@@ -17,9 +17,11 @@ from particlebot.errors import ParticlebotError
 # study's store, a person's file manager) sees either the old file or the new one, never half.
 # Why fsync before the rename: after a power cut the rename could otherwise reach the disk before
 # the data, leaving an empty file under the good name. The temporary name starts with a dot and
-# ends in ".tmp" plus the target's own suffix: globs for outputs ("step-*.npz", "[0-9]*.png") do
-# not see it, and writers that pick a format from the suffix (numpy's .npz, ffmpeg, matplotlib)
-# write the target's format.
+# ends in ".tmp" plus the target's own suffix, so that writers that pick a format from the suffix
+# (numpy's .npz, ffmpeg, matplotlib) write the target's format. pathlib's glob does not skip
+# dot-files ("*.json" matches ".r.json.x1.tmp.json"), and another process's temporary may vanish
+# between listing and reading: readers of a folder that a writer may be filling list it with
+# finished_files(), which leaves temporaries out.
 
 
 class OutputError(ParticlebotError, OSError):
@@ -63,6 +65,14 @@ def temporary_beside(path: Path) -> Path:
         raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from None
     os.close(handle)
     return Path(name)
+
+
+def finished_files(folder: Path, pattern: str) -> list[Path]:
+    """The files in `folder` matching `pattern`, sorted, without the temporaries of writes still
+    under way (names that start with a dot); an empty list where the folder does not exist."""
+    if not folder.is_dir():
+        return []
+    return sorted(path for path in folder.glob(pattern) if not path.name.startswith("."))
 
 
 def _sync_folder(folder: Path) -> None:

@@ -16,6 +16,7 @@ import pytest
 from distributed import LocalCluster
 
 from particlebot.commands.study import main
+from particlebot.fileio import finished_files
 from particlebot.studies.definitions import STUDIES, RawOptions, resolve
 from particlebot.studies.engine import (
     ClusterError,
@@ -46,8 +47,10 @@ def quick_specs(seeds: int = 2) -> list[RunSpec]:
 
 
 def finished(results: Path) -> dict[str, int]:
-    """Run id -> modification time of its result file (none before the folder exists)."""
-    return {path.stem: path.stat().st_mtime_ns for path in (results / "runs").glob("*.json")}
+    """Run id -> modification time of its result file (none before the folder exists; a result
+    still being written, under its temporary name, is not finished)."""
+    runs = finished_files(results / "runs", "*.json")
+    return {path.stem: path.stat().st_mtime_ns for path in runs}
 
 
 def test_a_tiny_study_runs_end_to_end_on_two_worker_processes(tmp_path: Path) -> None:

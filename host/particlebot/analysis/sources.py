@@ -17,6 +17,7 @@ import numpy.typing as npt
 
 from particlebot.analysis import trackfile
 from particlebot.errors import ParticlebotError
+from particlebot.fileio import finished_files
 from particlebot.logs import jsonl
 from particlebot.sim.runs import simcsv
 from particlebot.sim.swarm import records as world
@@ -257,7 +258,7 @@ def load_source(path: Path, accept: frozenset[str] = frozenset()) -> list[Centro
         raise SourceError(f"no such file or folder: {path}")
     if path.is_dir():
         found = []
-        for candidate in sorted([*path.glob("*.csv"), *path.glob("*.jsonl")]):
+        for candidate in sorted([*finished_files(path, "*.csv"), *finished_files(path, "*.jsonl")]):
             reader = _reader_for(candidate, accept)
             if reader is read_session_log:
                 # A real radio's logs may lie beside a simulated one's: only those with

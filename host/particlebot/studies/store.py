@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from particlebot.fileio import write_text
+from particlebot.fileio import finished_files, write_text
 from particlebot.studies.spec import RunRecord, RunSpec
 
 
@@ -40,9 +40,7 @@ class ResultStore:
     def load_finished(self, runner: str) -> tuple[dict[str, RunRecord], LoadReport]:
         report = LoadReport()
         records: dict[str, RunRecord] = {}
-        if not self.runs.is_dir():
-            return records, report
-        for path in sorted(self.runs.glob("*.json")):
+        for path in finished_files(self.runs, "*.json"):
             try:
                 record = RunRecord.from_json(json.loads(path.read_text()))
             except (OSError, ValueError, TypeError):
@@ -57,7 +55,7 @@ class ResultStore:
     def load_failures(self) -> dict[str, str]:
         """run id -> error of the runs that failed last time and have not finished since."""
         failures = {}
-        for path in sorted(self.failed.glob("*.json")) if self.failed.is_dir() else []:
+        for path in finished_files(self.failed, "*.json"):
             try:
                 data = json.loads(path.read_text())
                 failures[str(data["run_id"])] = str(data["error"])

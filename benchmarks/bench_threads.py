@@ -140,8 +140,11 @@ def main() -> int:
     print(f"cores {os.cpu_count()}, numba threads {most}", flush=True)
     began = time.monotonic()
     warm_up()  # compiling is not stepping
-    print(f"kernels ready in {time.monotonic() - began:.0f} s; "
-          f"threading layer {numba.threading_layer()}", flush=True)  # fmt: skip
+    spin = os.environ.get("GOMP_SPINCOUNT", "libgomp's default")
+    wait = os.environ.get("OMP_WAIT_POLICY", "unset")
+    print(f"kernels ready in {time.monotonic() - began:.0f} s; threading layer "
+          f"{numba.threading_layer()}, GOMP_SPINCOUNT {spin}, OMP_WAIT_POLICY {wait}",
+          flush=True)  # fmt: skip
     rows = measure(args.particles, args.seconds, args.busy)
     digests = same_bits(args.particles, args.bits_steps)
 

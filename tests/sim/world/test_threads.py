@@ -12,7 +12,14 @@ from particlebot.sim.particles.model.published import PublishedController
 from particlebot.sim.scenarios.placement import hexagonal
 from particlebot.sim.world import Lamp, PhysicsParams, World
 from particlebot.sim.world import world as world_module
-from particlebot.sim.world.threads import SAMPLES, ThreadGovernor
+from particlebot.sim.world.threads import (
+    CLOSE_EXPLORE_S,
+    EXPLORE_EVERY_S,
+    TRIAL_CALL_S,
+    TRIAL_S,
+    WINDOW_S,
+    ThreadGovernor,
+)
 
 
 class FakeClock:
@@ -23,64 +30,108 @@ class FakeClock:
         return self.now
 
 
-def drive(
-    governor: ThreadGovernor, clock: FakeClock, per_step: dict[int, float], calls: int
-) -> list[int]:
-    """`calls` calls of 100 steps, each 0.25 s of wall time apart; the counts chosen."""
-    chosen = []
-    for _ in range(calls):
-        threads = governor.choose()
-        chosen.append(threads)
-        governor.record(threads, 100, 100 * per_step[threads])
-        clock.now += 0.25
-    return chosen
+class Run:
+    """Compiled calls driven through a governor on a fake clock: each takes the wall time its
+    per-step cost says; what was chosen, and how much wall time each count had."""
+
+    def __init__(self, governor: ThreadGovernor, clock: FakeClock) -> None:
+        self.governor, self.clock = governor, clock
+        self.chosen: list[int] = []
+        self.began: list[float] = []
+
+    def drive(self, per_step: dict[int, float], calls: int, steps: int = 100) -> Run:
+        for _ in range(calls):
+            threads = self.governor.choose()
+            rows = min(steps, self.governor.steps_cap() or steps)
+            self.chosen.append(threads)
+            self.began.append(self.clock.now)
+            self.governor.record(threads, rows, rows * per_step[threads])
+            self.clock.now += rows * per_step[threads]
+        return self
+
+    def seconds_on(self, threads: int, since: float = 0.0) -> float:
+        ends = [*self.began[1:], self.clock.now]
+        return sum(
+            end - max(start, since)
+            for start, end, chosen in zip(self.began, ends, self.chosen, strict=True)
+            if chosen == threads and end > since
+        )
 
 
-def test_both_counts_are_measured_in_turn_then_the_faster_is_kept() -> None:
+IDLE = {2: 0.6e-3, 1: 1.0e-3}  # two threads do a step in 60 % of one thread's time
+BUSY = {2: 9.0e-3, 1: 1.0e-3}  # another process holds a core: the parallel passes wait for it
+
+
+def test_the_count_in_use_is_measured_then_the_other_tried_and_the_faster_kept() -> None:
     clock = FakeClock()
-    governor = ThreadGovernor(2, clock=clock)
-    # Idle machine: two threads do a step in 60 % of one thread's time.
-    chosen = drive(governor, clock, {2: 0.6e-3, 1: 1.0e-3}, calls=1 + 2 * SAMPLES + 20)
-    start = chosen[: 1 + 2 * SAMPLES]
-    assert start.count(1) >= SAMPLES and start.count(2) >= SAMPLES
-    assert set(chosen[1 + 2 * SAMPLES :]) == {2}
+    run = Run(ThreadGovernor(2, clock=clock), clock).drive(IDLE, calls=1000)  # 60 s
+    first_try = run.chosen.index(1)
+    # The try comes once the count in use has WINDOW_S measured (the first call is not).
+    assert run.began[first_try] >= WINDOW_S
+    # Then two threads, but for tries of the close rival: TRIAL_S every CLOSE_EXPLORE_S.
+    assert run.chosen[-1] == 2
+    share = run.seconds_on(1) / clock.now
+    assert 0.0 < share <= 1.2 * TRIAL_S / CLOSE_EXPLORE_S
 
 
 def test_a_busy_machine_falls_back_to_one_thread_and_returns_when_it_is_idle_again() -> None:
     clock = FakeClock()
-    governor = ThreadGovernor(2, clock=clock, explore_every_s=20.0)
-    # Another process holds a core: the parallel passes wait for it (9 times slower).
-    busy = {2: 9.0e-3, 1: 1.0e-3}
-    assert drive(governor, clock, busy, calls=40)[-10:] == [1] * 10
-    idle = {2: 0.6e-3, 1: 1.0e-3}
-    chosen = drive(governor, clock, idle, calls=400)  # 100 s of wall time
-    # Tried again every 20 s, two threads win once their median is fresh, and stay.
-    assert chosen[-10:] == [2] * 10
-    # What the exploring cost: few calls on the slower count while busy, and few while idle.
-    assert chosen.count(1) < 200
+    run = Run(ThreadGovernor(2, clock=clock), clock).drive(BUSY, calls=300)  # 30 s
+    # One thread all but the stalled count's short tries: each one call, every 20 s.
+    assert run.seconds_on(2, since=5.0) <= 2 * 9 * TRIAL_CALL_S
+    idle_from = clock.now
+    run.drive(IDLE, calls=1000)
+    # Tried again within 20 s, two threads win their try and keep the run.
+    back = next(t for t, c in zip(run.began, run.chosen, strict=True) if t > idle_from and c == 2)
+    assert back - idle_from <= EXPLORE_EVERY_S
+    assert run.seconds_on(1, since=back + TRIAL_S) / (clock.now - back) <= 0.15
 
 
-def test_a_count_that_stalls_is_tried_in_short_calls_and_dropped_after_one_measurement() -> None:
+def test_a_few_slow_calls_do_not_switch_the_count() -> None:
+    # A controller that hands the world six steps at a time makes calls of a few milliseconds;
+    # three of them descheduled (ten times slower) must not move an idle run to one thread.
+    hiccup = {2: 10 * IDLE[2], 1: IDLE[1]}
+    clocks = FakeClock(), FakeClock()
+    calm, bumped = (Run(ThreadGovernor(2, clock=c), c) for c in clocks)
+    calm.drive(IDLE, calls=5000, steps=6).drive(IDLE, calls=5000, steps=6)
+    bumped.drive(IDLE, calls=5000, steps=6).drive(hiccup, calls=3, steps=6)
+    bumped.drive(IDLE, calls=5000, steps=6)
+    # At most one more try of one thread than without the hiccup.
+    assert bumped.seconds_on(1) - calm.seconds_on(1) <= TRIAL_S + 6 * IDLE[1]
+    assert bumped.chosen[-1] == 2
+
+
+def test_load_that_arrives_is_followed_within_seconds() -> None:
     clock = FakeClock()
-    governor = ThreadGovernor(2, clock=clock, explore_every_s=20.0)
-    assert governor.choose() == 2 and governor.steps_cap() == 1  # nothing known: one step
-    governor.record(2, 1, 1.0)  # (a world's first call is not measured)
-    assert governor.choose() == 1 and governor.steps_cap() == 1
-    governor.record(1, 1, 1.0e-3)
-    assert governor.choose() == 2
-    governor.record(2, 1, 0.15)  # 150 times slower: no second try at the start
+    run = Run(ThreadGovernor(2, clock=clock), clock).drive(IDLE, calls=500)
+    busy_from = clock.now
+    run.drive(BUSY, calls=300)
+    # Two threads stall for seconds (their estimate fades towards the new load, and the recheck
+    # tries one thread), not for the 20 s of the exploring period; then only short tries.
+    assert run.seconds_on(2, since=busy_from) <= 8.0
+    assert run.chosen[-1] == 1
+
+
+def test_a_count_that_stalls_is_tried_in_short_calls_and_dropped_after_one() -> None:
+    clock = FakeClock()
+    governor = ThreadGovernor(2, clock=clock)
+    Run(governor, clock).drive({1: 1.0e-3, 2: 1.0e-3}, calls=40)  # a tie: one thread runs
+    assert governor.choose() == 1 and governor.steps_cap() is None
+    clock.now += CLOSE_EXPLORE_S
+    assert governor.choose() == 2 and governor.trying == 2
+    cap = governor.steps_cap()
+    assert cap is not None  # a try's call: 0.05 s of the in-use count's steps (the estimate's
+    assert abs(cap - TRIAL_CALL_S / 1.0e-3) <= 1  # fading may round it down by one)
+    governor.record(2, cap, cap * 0.15)  # 150 times slower: the try ends after that one call
+    assert governor.trying is None
     assert [governor.choose() for _ in range(5)] == [1] * 5
-    assert governor.steps_cap() is None  # the count in use runs whole chunks
-    clock.now = 20.0
-    assert governor.choose() == 2  # tried again after 20 s, for 0.05 s of the other's steps
-    assert governor.steps_cap() == 50
 
 
 def test_a_tie_leaves_the_other_cores_to_the_machine() -> None:
     clock = FakeClock()
-    governor = ThreadGovernor(2, clock=clock)
-    chosen = drive(governor, clock, {2: 0.95e-3, 1: 1.0e-3}, calls=20)
-    assert chosen[-5:] == [1] * 5
+    run = Run(ThreadGovernor(2, clock=clock), clock).drive({2: 0.95e-3, 1: 1.0e-3}, calls=400)
+    assert run.chosen[-1] == 1
+    assert run.seconds_on(2, since=5.0) / (clock.now - 5.0) <= 0.15
 
 
 def test_one_core_has_nothing_to_choose() -> None:

@@ -26,6 +26,8 @@ resolve a 10 um step 100 m from the origin).
 
 from __future__ import annotations
 
+import os
+
 import numba
 import numpy as np
 import numpy.typing as npt
@@ -37,6 +39,19 @@ import numpy.typing as npt
 # cache by the next, it segfaulted; compiled against cached kernels, it failed with "LLVM ERROR:
 # Symbol not found: allocate_sched" (the kind of numba issue #2439). test_compiled_afresh.py.
 # Every kernel module imports this one, so the pool is up before any of them is first called.
+#
+# The pool is numba's OpenMP layer on GNU libgomp, which reads its environment once, as it loads.
+# Its workers spin 300,000 times at each barrier and after each parallel region before they sleep.
+# Where other processes hold the cores, that spinning takes the core from the very thread a
+# barrier waits for, and from everyone else between regions: beside two busy loops on two cores,
+# a 10,000-particle step on two threads had calls stalled for 1.4 s and ran at 1.9-4.0 ms a
+# step, and even one thread slowed to 2.8-5.8 ms (the idle worker still spinning). With 10,000
+# spins: 1.6 ms on one thread, 1.9 on two, no stall, and an idle machine's two-thread step is
+# unchanged (0.50 against 0.48 ms); OMP_WAIT_POLICY=passive also ends the stalls but doubles the
+# idle step (1.15 ms). A user's own GOMP_SPINCOUNT or OMP_WAIT_POLICY is kept.
+SPIN_COUNT = "10000"
+if "GOMP_SPINCOUNT" not in os.environ and "OMP_WAIT_POLICY" not in os.environ:
+    os.environ["GOMP_SPINCOUNT"] = SPIN_COUNT
 numba.get_num_threads()
 
 

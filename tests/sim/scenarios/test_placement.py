@@ -138,6 +138,20 @@ def test_published_algorithm5_is_sparser_than_ours_and_the_more_so_the_larger_th
     assert shares[2000] > 2 * shares[100]
 
 
+def test_an_unseen_first_disc_is_covered_by_later_discs_and_nothing_else_overlaps() -> None:
+    # The published code files its first disc where no overlap test looks: the discs put down
+    # round the second and third can land on it, and only on it.
+    covered = 0
+    for seed in range(5):
+        xy = algorithm5_published(300, R, np.random.default_rng(seed), first_disc_seen=False).xy
+        pairs = cKDTree(xy).query_pairs(2 * R - OVERLAP_TOLERANCE_M, output_type="ndarray")
+        assert np.all(pairs.min(axis=1) == 0), seed
+        covered += len(pairs)
+        seen = algorithm5_published(300, R, np.random.default_rng(seed)).xy
+        assert not cKDTree(seen).query_pairs(2 * R - OVERLAP_TOLERANCE_M)
+    assert covered >= 1
+
+
 def test_published_algorithm5_is_reproducible_from_the_seed() -> None:
     first = algorithm5_published(800, R, np.random.default_rng(7)).xy
     again = algorithm5_published(800, R, np.random.default_rng(7)).xy

@@ -229,7 +229,12 @@ def algorithm5(
 
 
 def algorithm5_published(
-    count: int, radius: float, rng: np.random.Generator, at: tuple[float, float] = (0.0, 0.0)
+    count: int,
+    radius: float,
+    rng: np.random.Generator,
+    at: tuple[float, float] = (0.0, 0.0),
+    *,
+    first_disc_seen: bool = True,
 ) -> Placement:
     """Algorithm 5 as the published simulator's code runs it: the first three discs as in
     `algorithm5`; then a placed disc and an angle are drawn, and a first position that overlaps
@@ -238,7 +243,12 @@ def algorithm5_published(
     draws (counted over the whole placement) the disc being placed goes a diameter further out.
     The chosen disc takes part in the overlap test, rounding and all, as in the published code.
     Sparser than `algorithm5`, and the more so the larger the swarm: the SI's "more sparse
-    configurations that don't reconfigure as quickly" at 1,000 and 10,000 particles (S8)."""
+    configurations that don't reconfigure as quickly" at 1,000 and 10,000 particles (S8).
+
+    first_disc_seen=False files the first disc nowhere the overlap test looks, as the published
+    code does (it files it in the grid cell of (0, 0) while it sits at (5, 0)), so later discs
+    may be put down on top of it; the default leaves that out (research/first_disc.py measures
+    what it changes)."""
     _check_count(count)
     _check_positive("radius", radius)
     _check_point("at", at)
@@ -251,6 +261,7 @@ def algorithm5_published(
         math.radians(PUBLISHED_PIVOT_STEP_DEG),
         PUBLISHED_PATIENCE,
         rng,
+        first_disc_seen,
     )
     xy[:, 0] += float(at[0]) - first_x
     xy[:, 1] += float(at[1]) - first_y
@@ -294,6 +305,7 @@ def _algorithm5_published(
     pivot_step: float,
     patience: int,
     rng: np.random.Generator,
+    first_disc_seen: bool,
 ) -> FloatArray:
     """algorithm5_published on a hashed grid of cells one diameter wide (the overlap test's
     reach, so the 3 x 3 cells round a position hold every disc it could overlap)."""
@@ -342,7 +354,8 @@ def _algorithm5_published(
                 break
         xy[i, 0] = x
         xy[i, 1] = y
-        _file(i, x, y, x0, y0, diameter, head, chain, mask)
+        if i > 0 or first_disc_seen:
+            _file(i, x, y, x0, y0, diameter, head, chain, mask)
     return xy
 
 

@@ -64,12 +64,23 @@ def paired_speed(count: int, seed: int, duration: str, skip: str) -> dict[str, f
     return speeds
 
 
+def seed_range(text: str) -> range:
+    """'3' or '1-3' -> the seeds, for argparse (which turns a ValueError into one line)."""
+    first, _, last = text.partition("-")
+    seeds = range(int(first), int(last or first) + 1)
+    if not seeds or seeds.start < 0:
+        raise ValueError(text)
+    return seeds
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="*", default=[100, 1000, 10000])
     parser.add_argument("--seeds", type=int, default=20, help="placements counted per size")
     parser.add_argument("--run", type=int, help="also run the dead study's cell of this size")
-    parser.add_argument("--run-seeds", default="1", help="seeds of those runs, e.g. 1-3")
+    parser.add_argument(
+        "--run-seeds", type=seed_range, default="1", help="seeds of those runs, e.g. 1-3"
+    )
     parser.add_argument("--duration", default="2h")
     parser.add_argument("--skip", default="30min")
     parser.add_argument("--csv", help="append the runs' speeds to this CSV")
@@ -84,9 +95,10 @@ def main() -> int:
               f"| {max(d for _, d in found):.2f} |", flush=True)  # fmt: skip
     if args.run is None:
         return 0
-    first, _, last = args.run_seeds.partition("-")
-    for seed in range(int(first), int(last or first) + 1):
+    finite = True
+    for seed in args.run_seeds:
         speeds = paired_speed(args.run, seed, args.duration, args.skip)
+        finite = finite and all(math.isfinite(v) for v in speeds.values())
         if args.csv:
             path = Path(args.csv)
             new = not path.exists()
@@ -97,7 +109,7 @@ def main() -> int:
                                      "unseen_mm_s"])  # fmt: skip
                 writer.writerow([args.run, seed, args.duration, args.skip,
                                  f"{speeds['seen']:.6g}", f"{speeds['unseen']:.6g}"])  # fmt: skip
-    return 0 if all(math.isfinite(v) for v in speeds.values()) else 1
+    return 0 if finite else 1
 
 
 if __name__ == "__main__":

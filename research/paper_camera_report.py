@@ -184,6 +184,8 @@ def _markdown(rows: list[Row], filmed: dict[Cell, list[dict[str, float]]]) -> No
     print()
     for key, (inside, total) in counts.items():
         print(f"{key}: {inside} of {total} cells inside the paper's band")
+    if not filmed:
+        return
     print()
     print("| particles | dead | filmed runs | true | tracked | paper camera | paper |")
     print("|---|---|---|---|---|---|---|")

@@ -175,6 +175,7 @@ class ThreadGovernor:
         )
         if estimate.measured_s >= TRIAL_S or stalls:
             self._trying = None
-            if self.best() != self._current:
-                self._current = self.best()
+            chosen = self.best()
+            if chosen != self._current:
+                self._current = chosen
                 self._estimates[self._current].restart()  # WINDOW_S more before a try
